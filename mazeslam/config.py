@@ -1,0 +1,77 @@
+"""Parameters as small dataclasses, loadable from TOML files in ``configs/``.
+
+Every parameter has a default in code (the e-puck and the exercise); a TOML file overrides only the
+keys it names. A key the dataclass does not know is an error that names the file, the section and
+the key, so a typo never silently falls back to a default.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import tomllib
+from pathlib import Path
+from typing import Any, TypeVar
+
+T = TypeVar("T")
+
+
+class ConfigError(ValueError):
+    """A configuration file or mapping that cannot be turned into parameters."""
+
+
+def from_mapping(cls: type[T], mapping: dict[str, Any], where: str = "config") -> T:
+    """Build dataclass ``cls`` from ``mapping``, recursing into fields that are dataclasses.
+
+    ``where`` names the origin in error messages (e.g. ``"configs/sim.toml [laser]"``).
+    """
+    if not isinstance(mapping, dict):
+        raise ConfigError(f"{where}: expected a table of parameters, got {type(mapping).__name__}")
+    fields = {f.name: f for f in dataclasses.fields(cls)}
+    unknown = sorted(set(mapping) - set(fields))
+    if unknown:
+        raise ConfigError(
+            f"{where}: unknown parameter(s) {', '.join(unknown)}; known: {', '.join(sorted(fields))}"
+        )
+    values = {}
+    for name, value in mapping.items():
+        default = getattr(cls, "__dataclass_fields__")[name].default_factory
+        nested_type = _nested_dataclass_type(cls, name, default)
+        if nested_type is not None:
+            values[name] = from_mapping(nested_type, value, f"{where} [{name}]")
+        else:
+            values[name] = value
+    try:
+        return cls(**values)
+    except (TypeError, ValueError) as error:
+        raise ConfigError(f"{where}: {error}") from error
+
+
+def _nested_dataclass_type(cls, name, default_factory):
+    """The dataclass type of field ``name`` if it holds a nested dataclass, else None."""
+    if default_factory is not dataclasses.MISSING and dataclasses.is_dataclass(default_factory):
+        return default_factory
+    return None
+
+
+def load_toml(cls: type[T], path: str | Path) -> T:
+    """Read a TOML file into dataclass ``cls`` (sections map to nested dataclass fields)."""
+    path = Path(path)
+    try:
+        with path.open("rb") as handle:
+            mapping = tomllib.load(handle)
+    except FileNotFoundError as error:
+        raise ConfigError(f"{path}: config file not found") from error
+    except tomllib.TOMLDecodeError as error:
+        raise ConfigError(f"{path}: not valid TOML: {error}") from error
+    return from_mapping(cls, mapping, str(path))
+
+
+def to_mapping(params) -> dict[str, Any]:
+    """The dataclass ``params`` as a plain (JSON/TOML-ready) nested dict."""
+    return dataclasses.asdict(params)
+
+
+def require(condition: bool, message: str) -> None:
+    """Raise ValueError(message) unless ``condition``: the parameter checks of ``__post_init__``."""
+    if not condition:
+        raise ValueError(message)

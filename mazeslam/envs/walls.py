@@ -1,0 +1,123 @@
+"""Thick-wall geometry of a maze: the solid blocks, the surfaces a laser hits, the true corners.
+
+Walls of thickness t are centred on the grid lines. Cutting the plane at ``k s ± t/2`` along both
+axes gives a grid of (2R+1) x (2C+1) rectangular blocks: even index bands hold walls and posts,
+odd bands hold cell interiors. A block is solid when it is a wall that exists, or a post that
+touches one. Everything else follows from that block grid:
+
+* surfaces — the edges between a solid and a free block, merged into maximal straight segments;
+* corners — grid vertices where the solid blocks around them turn: one solid of four is a convex
+  corner (a wall end seen from the corridor), three of four a concave (inside) corner.
+
+The space outside the maze counts as solid; the outer boundary is closed, so no surface faces it.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from mazeslam.envs.maze import Maze
+
+
+@dataclass(frozen=True)
+class WallGeometry:
+    """Geometry of a maze's thick walls, all in world metres.
+
+    Attributes:
+        surfaces: (W, 4) segments ``[x1, y1, x2, y2]``, the wall faces that border free space.
+        corners: (K, 2) corner positions ``[x, y]``.
+        corner_convex: (K,) bool, True for convex corners (wall ends), False for inside corners.
+        boxes: (B, 4) solid rectangles ``[xmin, ymin, xmax, ymax]`` whose union is the walls.
+    """
+
+    surfaces: np.ndarray
+    corners: np.ndarray
+    corner_convex: np.ndarray
+    boxes: np.ndarray
+
+
+def solid_blocks(maze: Maze) -> np.ndarray:
+    """Which blocks of the (2R+1, 2C+1) block grid are solid; index [i, j] with i along y, j along x."""
+    rows, cols = maze.rows, maze.cols
+    solid = np.zeros((2 * rows + 1, 2 * cols + 1), dtype=bool)
+    solid[0::2, 1::2] = maze.horizontal
+    solid[1::2, 0::2] = maze.vertical
+    posts = np.zeros((rows + 1, cols + 1), dtype=bool)
+    posts[:, :-1] |= maze.horizontal
+    posts[:, 1:] |= maze.horizontal
+    posts[:-1, :] |= maze.vertical
+    posts[1:, :] |= maze.vertical
+    solid[0::2, 0::2] = posts
+    return solid
+
+
+def block_edges(count: int, cell_size: float, thickness: float) -> np.ndarray:
+    """Coordinates (metres) of the 2*count + 2 block boundaries along one axis of ``count`` cells."""
+    lines = np.arange(count + 1) * cell_size
+    edges = np.empty(2 * count + 2)
+    edges[0::2] = lines - thickness / 2
+    edges[1::2] = lines + thickness / 2
+    return edges
+
+
+def wall_geometry(maze: Maze) -> WallGeometry:
+    """Surfaces, corners and collision boxes of ``maze``'s walls."""
+    solid = solid_blocks(maze)
+    xs = block_edges(maze.cols, maze.cell_size, maze.wall_thickness)
+    ys = block_edges(maze.rows, maze.cell_size, maze.wall_thickness)
+    corners, convex = _corners(solid, xs, ys)
+    return WallGeometry(_surfaces(solid, xs, ys), corners, convex, _boxes(solid, xs, ys))
+
+
+def _surfaces(solid: np.ndarray, xs: np.ndarray, ys: np.ndarray) -> np.ndarray:
+    segments = []
+    # Vertical faces: between blocks (i, j) and (i, j+1), on x = xs[j+1]; merged along i.
+    change = solid[:, :-1] != solid[:, 1:]
+    side = solid[:, :-1]  # True: solid on the left of the face
+    for j in range(change.shape[1]):
+        for start, stop in _runs(change[:, j], side[:, j]):
+            segments.append([xs[j + 1], ys[start], xs[j + 1], ys[stop]])
+    # Horizontal faces: between blocks (i, j) and (i+1, j), on y = ys[i+1]; merged along j.
+    change = solid[:-1, :] != solid[1:, :]
+    side = solid[:-1, :]
+    for i in range(change.shape[0]):
+        for start, stop in _runs(change[i, :], side[i, :]):
+            segments.append([xs[start], ys[i + 1], xs[stop], ys[i + 1]])
+    return np.array(segments, dtype=float).reshape(-1, 4)
+
+
+def _runs(is_face: np.ndarray, orientation: np.ndarray):
+    """Maximal runs [start, stop) of consecutive faces with the same orientation (solid side)."""
+    start = None
+    for k in range(len(is_face) + 1):
+        continues = (
+            k < len(is_face) and is_face[k] and start is not None and orientation[k] == orientation[start]
+        )
+        if start is not None and not continues:
+            yield start, k
+            start = None
+        if start is None and k < len(is_face) and is_face[k]:
+            start = k
+
+
+def _corners(solid: np.ndarray, xs: np.ndarray, ys: np.ndarray):
+    padded = np.pad(solid, 1, constant_values=True)  # outside the maze counts as solid
+    around = (
+        padded[:-1, :-1].astype(int) + padded[:-1, 1:] + padded[1:, :-1] + padded[1:, 1:]
+    )  # (2R+2, 2C+2): solid blocks around each block-grid vertex
+    diagonal = (padded[:-1, :-1] == padded[1:, 1:]) & (padded[:-1, 1:] == padded[1:, :-1]) & (around == 2)
+    is_corner = (around == 1) | (around == 3) | diagonal
+    i, j = np.nonzero(is_corner)
+    corners = np.column_stack([xs[j], ys[i]])
+    return corners, around[i, j] != 3
+
+
+def _boxes(solid: np.ndarray, xs: np.ndarray, ys: np.ndarray) -> np.ndarray:
+    """Solid blocks merged along x into rectangles [xmin, ymin, xmax, ymax]."""
+    boxes = []
+    for i in range(solid.shape[0]):
+        for start, stop in _runs(solid[i], np.ones(solid.shape[1], dtype=bool)):
+            boxes.append([xs[start], ys[i], xs[stop], ys[i + 1]])
+    return np.array(boxes, dtype=float).reshape(-1, 4)

@@ -1,0 +1,111 @@
+"""Files written beside a log ``run.log``: ``run.truth.csv`` (true poses) and ``run.map.json`` (the world).
+
+``run.truth.csv`` — header ``t,x,y,theta``, then one row per log record, in record order: the true
+pose of the robot (wheel-axle centre) in the world frame when the record was taken; metres,
+radians in (-pi, pi].
+
+``run.map.json`` — a JSON object (schema in ``docs/formats.md``) with at least:
+
+* ``walls``: list of ``[x1, y1, x2, y2]``, the wall surfaces the laser hits (thickness applied), m;
+* ``corners``: list of ``[x, y]``, the true corners of those surfaces, m;
+* ``sensor``: the beam geometry and noise (``beams``, ``max_range``, ``range_noise_std``,
+  ``first_beam_angle``, ``direction``, ``field_of_view``, ``mount_x``, ``mount_y``, ...);
+* and, from the simulator, ``corner_convex``, ``start_pose``, ``seed``, ``maze`` and every parameter.
+"""
+
+from __future__ import annotations
+
+import json
+import re
+from pathlib import Path
+
+import numpy as np
+
+from mazeslam.beams import BeamGeometry
+
+TRUTH_HEADER = "t,x,y,theta"
+MAP_FORMAT = "mazeslam-map"
+MAP_VERSION = 1
+
+
+def sidecar_path(log_path: str | Path, kind: str) -> Path:
+    """``run.log`` -> ``run.<kind>``, e.g. ``sidecar_path('runs/a.log', 'truth.csv')`` is ``runs/a.truth.csv``."""
+    log_path = Path(log_path)
+    return log_path.with_name(f"{log_path.stem}.{kind}")
+
+
+def truth_path(log_path: str | Path) -> Path:
+    return sidecar_path(log_path, "truth.csv")
+
+
+def map_path(log_path: str | Path) -> Path:
+    return sidecar_path(log_path, "map.json")
+
+
+def write_truth(path: str | Path, times: np.ndarray, poses: np.ndarray) -> None:
+    """Write ``times`` (R,) seconds and ``poses`` (R, 3) ``x, y, theta`` as a truth CSV."""
+    table = np.column_stack([np.asarray(times, dtype=float), np.asarray(poses, dtype=float)])
+    if table.ndim != 2 or table.shape[1] != 4:
+        raise ValueError(f"truth needs times (R,) and poses (R, 3), got a table shaped {table.shape}")
+    np.savetxt(path, table, fmt="%.6f", delimiter=",", header=TRUTH_HEADER, comments="")
+
+
+def read_truth(path: str | Path) -> tuple[np.ndarray, np.ndarray]:
+    """Read a truth CSV: ``(times (R,), poses (R, 3))``. Errors name the file and what is wrong."""
+    path = Path(path)
+    with path.open() as handle:
+        header = handle.readline().strip()
+    if header.replace(" ", "") != TRUTH_HEADER:
+        raise ValueError(f"{path}:1: expected the header {TRUTH_HEADER!r}, got {header!r}")
+    try:
+        table = np.loadtxt(path, delimiter=",", skiprows=1, ndmin=2)
+    except ValueError as error:
+        raise ValueError(f"{path}: {error}") from error
+    if table.shape[1] != 4 or not np.all(np.isfinite(table)):
+        raise ValueError(f"{path}: every row needs 4 finite values t,x,y,theta")
+    return table[:, 0], table[:, 1:]
+
+
+def write_map(path: str | Path, walls, corners, sensor: dict, **extra) -> None:
+    """Write a map sidecar; ``extra`` keys (JSON-serialisable) are stored beside the required ones."""
+    document = {
+        "format": MAP_FORMAT,
+        "version": MAP_VERSION,
+        "walls": np.round(np.asarray(walls, dtype=float), 6).tolist(),
+        "corners": np.round(np.asarray(corners, dtype=float), 6).tolist(),
+        "sensor": sensor,
+        **extra,
+    }
+    text = json.dumps(document, indent=1, default=_json_default)
+    # One line per innermost list (a wall, a corner) keeps the file short and readable.
+    text = re.sub(r"\[([^\[\]{}\"]*)\]", lambda m: "[" + " ".join(m.group(1).split()) + "]", text)
+    Path(path).write_text(text + "\n")
+
+
+def read_map(path: str | Path) -> dict:
+    """Read a map sidecar; ``walls`` (W, 4) and ``corners`` (K, 2) come back as float arrays."""
+    path = Path(path)
+    try:
+        document = json.loads(path.read_text())
+    except json.JSONDecodeError as error:
+        raise ValueError(f"{path}: not valid JSON: {error}") from error
+    missing = [key for key in ("walls", "corners", "sensor") if key not in document]
+    if missing:
+        raise ValueError(f"{path}: the map sidecar lacks {', '.join(missing)}")
+    document["walls"] = np.asarray(document["walls"], dtype=float).reshape(-1, 4)
+    document["corners"] = np.asarray(document["corners"], dtype=float).reshape(-1, 2)
+    return document
+
+
+def beam_geometry(sensor: dict) -> BeamGeometry:
+    """The ``BeamGeometry`` recorded in a map sidecar's ``sensor`` section."""
+    keys = ("first_beam_angle", "direction", "field_of_view", "mount_x", "mount_y")
+    return BeamGeometry(**{key: sensor[key] for key in keys if key in sensor})
+
+
+def _json_default(value):
+    if isinstance(value, np.ndarray):
+        return value.tolist()
+    if isinstance(value, np.generic):
+        return value.item()
+    raise TypeError(f"{type(value).__name__} is not JSON serialisable")

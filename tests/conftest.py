@@ -1,0 +1,25 @@
+"""Shared fixtures: paths to the real data beside the project, and small simulated runs."""
+
+from pathlib import Path
+
+import pytest
+
+PROJECT_ROOT = Path(__file__).resolve().parents[1]
+SHARED_DATA = PROJECT_ROOT.parent / "shared" / "data"
+COURSE_LOG = SHARED_DATA / "course" / "log1.txt"
+
+
+@pytest.fixture
+def course_log_path() -> Path:
+    if not COURSE_LOG.exists():
+        pytest.skip(f"real course log not found at {COURSE_LOG} (the shared data folder is absent)")
+    return COURSE_LOG
+
+
+@pytest.fixture(scope="session")
+def default_run(tmp_path_factory):
+    """A simulated run on every default (random 4 x 4 maze, seed 0), made once per test session."""
+    from mazeslam import simulate
+
+    out = tmp_path_factory.mktemp("default_run") / "run.log"
+    return simulate(out, seed=0, progress=False)

@@ -1,0 +1,32 @@
+import numpy as np
+import pytest
+
+from mazeslam.beams import EXERCISE_CONVENTION, FORWARD_FIRST_CONVENTION, BeamGeometry
+
+
+def test_exercise_convention_starts_behind():
+    np.testing.assert_allclose(EXERCISE_CONVENTION.bearings(4), [np.pi, -np.pi / 2, 0, np.pi / 2], atol=1e-12)
+
+
+def test_forward_first_convention_of_log1():
+    bearings = FORWARD_FIRST_CONVENTION.bearings(360)
+    assert bearings[0] == 0
+    assert bearings[90] == pytest.approx(np.pi / 2)
+
+
+def test_clockwise_direction():
+    np.testing.assert_allclose(BeamGeometry(0.0, -1).bearings(4), [0, -np.pi / 2, np.pi, np.pi / 2], atol=1e-12)
+
+
+def test_front_fan_spans_first_to_last_beam():
+    fan = BeamGeometry(first_beam_angle=-np.pi / 2, field_of_view=np.pi)
+    bearings = fan.bearings(181)
+    assert bearings[0] == pytest.approx(-np.pi / 2)
+    assert bearings[-1] == pytest.approx(np.pi / 2)
+    assert fan.angle_step(181) == pytest.approx(np.radians(1))
+
+
+@pytest.mark.parametrize("kwargs", [{"direction": 0}, {"field_of_view": 0.0}, {"field_of_view": 7.0}])
+def test_impossible_geometry_is_rejected(kwargs):
+    with pytest.raises(ValueError):
+        BeamGeometry(**kwargs)

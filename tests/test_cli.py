@@ -1,0 +1,67 @@
+import subprocess
+import sys
+
+import pytest
+from click.testing import CliRunner
+
+from mazeslam import log, sidecars
+from mazeslam.cli import main
+
+
+def invoke(*args):
+    return CliRunner().invoke(main, [str(a) for a in args], catch_exceptions=False)
+
+
+def test_simulate_writes_log_and_sidecars(tmp_path):
+    out = tmp_path / "runs" / "demo.log"
+    result = invoke("simulate", "--out", out, "--seed", 4, "--rows", 3, "--cols", 5, "--beams", 120,
+                    "--duration", 15, "--quiet")
+    assert result.exit_code == 0, result.output
+    assert f"wrote {out}" in result.output
+    course_log = log.read(out)
+    assert course_log.n_beams == 120
+    assert sidecars.read_map(sidecars.map_path(out))["maze"]["cols"] == 5
+    assert sidecars.truth_path(out).read_text().startswith("t,x,y,theta\n")
+
+
+def test_info_summarises_a_log(default_run):
+    result = invoke("info", default_run.log_path)
+    assert result.exit_code == 0
+    assert "valid course log" in result.output
+    assert "beams per scan    180" in result.output
+
+
+def test_info_on_a_broken_log_names_the_line_and_exits_2(tmp_path):
+    path = tmp_path / "broken.log"
+    path.write_text("0.0 0 0 0 -1 -1\n0.1 1 0.5 0.5 zz 0.5\n")
+    process = subprocess.run([sys.executable, "-m", "mazeslam.cli", "info", str(path)],
+                             capture_output=True, text=True)
+    assert process.returncode == 2
+    assert f"error: {path}:2: value 'zz' in column 5 is not a number" in process.stderr
+
+
+def test_info_lenient_reports_skipped_lines(tmp_path):
+    path = tmp_path / "broken.log"
+    path.write_text("0.0 0 0 0 -1 -1\n0.1 1 0.5 0.5 zz 0.5\n0.2 1 0.5 0.5 0.5 0.5\n")
+    result = invoke("info", path, "--lenient")
+    assert result.exit_code == 0
+    assert "skipped line 2: value 'zz'" in result.output
+
+
+def test_simulate_rejects_impossible_parameters(tmp_path):
+    result = CliRunner().invoke(main, ["simulate", "--out", str(tmp_path / "x.log"), "--beams", "1"])
+    assert result.exit_code == 2
+    assert "--beams" in result.output
+
+
+def test_demo_prints_ate_table_and_writes_plot(tmp_path):
+    result = invoke("demo", "--out", tmp_path / "demo", "--quiet")
+    assert result.exit_code == 0, result.output
+    assert "| dead reckoning |" in result.output
+    assert (tmp_path / "demo" / "run.png").stat().st_size > 10_000
+    assert (tmp_path / "demo" / "ate.csv").exists()
+
+
+@pytest.mark.parametrize("command", ["simulate", "info", "demo"])
+def test_help(command):
+    assert invoke(command, "--help").exit_code == 0

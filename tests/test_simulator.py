@@ -1,0 +1,167 @@
+import dataclasses
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from mazeslam import log, sidecars, simulate
+from mazeslam.config import ConfigError
+from mazeslam.envs.laser import LaserParams, cast_rays
+from mazeslam.envs.maze import generate_maze, load_maze
+from mazeslam.envs.odometry import OdometryParams
+from mazeslam.envs.policies import ScriptedPolicy, load_commands
+from mazeslam.envs.simulator import MazeParams, SimulationConfig, load_config
+from mazeslam.filters.motion import dead_reckoning
+from mazeslam.geometry import compose
+
+CONFIGS = Path(__file__).resolve().parents[1] / "configs"
+
+
+def assert_scans_match_truth_and_map(log_path):
+    """Re-cast every logged scan from the true pose against the map sidecar's walls."""
+    course_log = log.read(log_path)
+    _, truth = sidecars.read_truth(sidecars.truth_path(log_path))
+    world = sidecars.read_map(sidecars.map_path(log_path))
+    sensor = world["sensor"]
+    geometry = sidecars.beam_geometry(sensor)
+    bearings = geometry.bearings(course_log.width)
+    tolerance = 5 * sensor["range_noise_std"] + 1e-6
+    assert len(truth) == len(course_log)
+    for index in np.flatnonzero(course_log.is_scan):
+        sensor_pose = compose(truth[index], [geometry.mount_x, geometry.mount_y, 0.0])
+        expected = cast_rays(sensor_pose[:2], sensor_pose[2] + bearings, world["walls"], sensor["max_range"])
+        logged = course_log.values[index]
+        returned = logged > 0
+        assert returned.mean() > 0.5
+        np.testing.assert_allclose(logged[returned], expected[returned], atol=tolerance)
+        # Without dropout a beam returns nothing only when its wall is (nearly) out of range.
+        assert np.all(expected[~returned] > sensor["max_range"] - tolerance)
+    return course_log, truth, world
+
+
+def test_default_run_scans_agree_with_truth_and_map(default_run):
+    course_log, truth, _ = assert_scans_match_truth_and_map(default_run.log_path)
+    assert course_log.n_beams == 180
+    assert default_run.tour_complete
+
+
+def test_16x16_maze_scans_agree_with_truth_and_map(tmp_path):
+    config = dataclasses.replace(SimulationConfig(), maze=MazeParams(rows=16, cols=16))
+    result = simulate(tmp_path / "big.log", config=config, seed=2, duration=120, progress=False)
+    assert result.maze.rows == 16
+    assert_scans_match_truth_and_map(result.log_path)
+
+
+def test_other_beam_conventions_and_mounting_are_recorded_and_cast(tmp_path):
+    laser = LaserParams(beams=90, first_beam_angle=np.pi / 2, direction=-1, mount_x=0.02)
+    config = dataclasses.replace(SimulationConfig(), laser=laser)
+    result = simulate(tmp_path / "conv.log", config=config, seed=1, duration=30, progress=False)
+    _, _, world = assert_scans_match_truth_and_map(result.log_path)
+    assert world["sensor"]["direction"] == -1 and world["sensor"]["mount_x"] == 0.02
+
+
+def test_same_seed_same_bytes_other_seed_other_run(tmp_path):
+    def run(name, seed):
+        result = simulate(tmp_path / f"{name}.log", seed=seed, duration=20, progress=False)
+        return [p.read_bytes() for p in (result.log_path, result.truth_path, result.map_path)]
+
+    first, again, other = run("a", 5), run("b", 5), run("c", 6)
+    assert first == again
+    assert first[0] != other[0]
+
+
+def test_noise_free_odometry_dead_reckons_the_truth(tmp_path):
+    config = dataclasses.replace(SimulationConfig(), odometry=OdometryParams(slip_std=0.0))
+    result = simulate(tmp_path / "exact.log", config=config, seed=3, progress=False)
+    course_log = log.read(result.log_path)
+    world = sidecars.read_map(result.map_path)
+    estimate = dead_reckoning(course_log, world["start_pose"])
+    # Only encoder quantisation (0.13 mm a step) separates them.
+    assert np.abs(estimate[:, :2] - result.poses[:, :2]).max() < 3e-3
+
+
+def test_explorer_visits_every_cell_and_returns(default_run):
+    maze = default_run.maze
+    visited = {maze.cell_of(x, y) for x, y, _ in default_run.poses}
+    assert visited == {(r, c) for r in range(maze.rows) for c in range(maze.cols)}
+    start = maze.cell_center(*maze.start_cell)
+    assert np.hypot(*(default_run.poses[-1, :2] - start)) < 0.03
+
+
+def test_record_rates_follow_the_logger_settings(default_run):
+    course_log = log.read(default_run.log_path)
+    scan_times = course_log.times[course_log.is_scan]
+    assert np.median(np.diff(scan_times)) == pytest.approx(0.75, abs=0.02)
+    odometry_times = course_log.times[course_log.is_odometry]
+    assert np.median(np.diff(odometry_times)) == pytest.approx(0.2, abs=1e-6)
+    # Every scan follows an odometry record with the same timestamp.
+    scan_rows = np.flatnonzero(course_log.is_scan)
+    assert np.all(course_log.flags[scan_rows - 1] == log.ODOMETRY)
+    np.testing.assert_array_equal(course_log.times[scan_rows - 1], course_log.times[scan_rows])
+
+
+def test_scripted_policy_drives_open_loop(tmp_path):
+    config = dataclasses.replace(SimulationConfig(), odometry=OdometryParams(slip_std=0.0))
+    policy = ScriptedPolicy([(2.0, 0.05, 0.0), (1.0, 0.0, 0.5)])
+    result = simulate(tmp_path / "s.log", config=config, maze=CONFIGS / "mazes" / "paper_sheet.txt",
+                      policy=policy, duration=4.0, progress=False)
+    start = result.maze.cell_center(0, 0)
+    final = result.poses[-1]
+    np.testing.assert_allclose(final[:2], start + [0.1, 0.0], atol=1e-3)
+    assert final[2] == pytest.approx(0.5, abs=0.01)
+
+
+def test_load_commands(tmp_path):
+    path = tmp_path / "cmd.txt"
+    path.write_text("# duration speed turn\n1.0 0.05 0\n2, 0, 0.3\n")
+    policy = load_commands(path)
+    assert policy(0.5, None) == (0.05, 0.0) and policy(2.0, None) == (0.0, 0.3)
+    assert policy(3.5, None) == (0.0, 0.0) and policy.done
+    path.write_text("1.0 0.05\n")
+    with pytest.raises(ValueError, match=r"cmd.txt:1: expected 'duration speed turn_rate'"):
+        load_commands(path)
+
+
+def test_maze_file_run(tmp_path):
+    result = simulate(tmp_path / "p.log", maze=CONFIGS / "mazes" / "large_8x8.txt", seed=0, duration=60,
+                      progress=False)
+    assert result.maze.rows == 8
+    assert_scans_match_truth_and_map(result.log_path)
+
+
+def test_shipped_config_equals_the_defaults():
+    assert load_config(CONFIGS / "simulation.toml") == SimulationConfig()
+
+
+def test_toml_overrides_only_what_it_names(tmp_path):
+    path = tmp_path / "c.toml"
+    path.write_text("[laser]\nbeams = 90\n[maze]\nrows = 2\n")
+    config = load_config(path)
+    assert config.laser.beams == 90 and config.maze.rows == 2
+    assert config.laser.max_range == LaserParams().max_range
+
+
+@pytest.mark.parametrize(
+    "text, message",
+    [
+        ("[laser]\nbeam = 90\n", r"c.toml \[laser\]: unknown parameter\(s\) beam"),
+        ("[laser]\nbeams = 0\n", r"c.toml \[laser\]: laser beams must be at least 1"),
+        ("[logger]\nscan_period = -1\n", "scan_period must be positive"),
+        ("[drive]\ncruise_speed = 0.5\n", "exceeds the robot's max_wheel_speed"),
+        ("[laser\n", "not valid TOML"),
+    ],
+)
+def test_bad_configs_name_file_section_and_reason(tmp_path, text, message):
+    path = tmp_path / "c.toml"
+    path.write_text(text)
+    with pytest.raises(ConfigError, match=message):
+        load_config(path)
+
+
+def test_impossible_run_parameters(tmp_path):
+    with pytest.raises(ValueError, match="duration"):
+        simulate(tmp_path / "x.log", duration=-1, progress=False)
+    with pytest.raises(ValueError, match="at least one row"):
+        generate_maze(0, 3)
+    with pytest.raises(ValueError, match="not found"):
+        load_maze(tmp_path / "none.txt")
