@@ -95,3 +95,22 @@ def test_mounting_offset_moves_the_sensor_ahead_of_the_axle():
 def test_impossible_laser_parameters_are_rejected(kwargs):
     with pytest.raises(ValueError):
         LaserParams(**kwargs)
+
+
+def test_ray_caster_on_oblique_walls_agrees_with_pymunk():
+    """Walls at any angle, beams in any order: the angular pruning must not lose a hit."""
+    rng = np.random.default_rng(7)
+    segments = rng.uniform(-1, 1, (60, 4))
+    space = pymunk.Space()
+    for x1, y1, x2, y2 in segments:
+        space.add(pymunk.Segment(space.static_body, (x1, y1), (x2, y2), 0))
+    angles = rng.uniform(-4, 4, 300)  # unsorted, some beyond +-pi
+    for origin in rng.uniform(-0.8, 0.8, (10, 2)):
+        ours = cast_rays(origin, angles, segments, max_range=1.5)
+        for angle, distance in zip(angles, ours):
+            end = origin + 1.5 * np.array([np.cos(angle), np.sin(angle)])
+            hit = space.segment_query_first(tuple(origin), tuple(end), 0, pymunk.ShapeFilter())
+            if hit is None:
+                assert distance == np.inf
+            else:
+                assert distance == pytest.approx(hit.alpha * 1.5, abs=1e-9)

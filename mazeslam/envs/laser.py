@@ -7,13 +7,17 @@ range of 0 means "no return" (out of range or dropped), as in the course log for
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
 
 from mazeslam.beams import BeamGeometry
 from mazeslam.config import require
-from mazeslam.geometry import compose
+from mazeslam.geometry import TWO_PI
+
+#: Angle (rad) by which a wall's angular extent is widened when choosing the beams to test.
+ANGLE_MARGIN = 1e-9
 
 
 @dataclass(frozen=True)
@@ -56,37 +60,77 @@ class LaserParams:
                             self.mount_x, self.mount_y)
 
 
-def cast_rays(origin: np.ndarray, angles: np.ndarray, segments: np.ndarray, max_range: float) -> np.ndarray:
-    """Distance from ``origin`` (2,) along each world angle in ``angles`` (N,) to the first segment hit.
+class RayCaster:
+    """Casts a fixed fan of beams against fixed wall segments, from any sensor pose.
 
-    ``segments`` is (W, 4) ``[x1, y1, x2, y2]``. Walls wholly farther than ``max_range`` are culled
-    first. Returns (N,) distances in metres, ``inf`` where no segment lies within ``max_range``.
+    Everything that does not depend on the pose is computed once: the walls' bounding boxes, the
+    beam directions and their angular order. Per cast, walls wholly farther than ``max_range`` are
+    culled by their bounding boxes; then each remaining wall is intersected only with the beams
+    inside the angle it subtends (binary search over the sorted beam bearings), so the work grows
+    with the beams times the walls along each beam, not with beams times walls.
+
+    Args:
+        segments: (W, 4) walls ``[x1, y1, x2, y2]``, world metres.
+        bearings: (N,) beam directions in the sensor frame, radians.
+        max_range: metres; walls farther away are not seen.
     """
-    origin = np.asarray(origin, dtype=float)
-    p = segments[:, :2] - origin
-    e = segments[:, 2:] - segments[:, :2]
-    segments_near = _segment_distance(p, e) <= max_range
-    p, e = p[segments_near], e[segments_near]
-    d = np.stack([np.cos(angles), np.sin(angles)], axis=-1)  # (N, 2)
-    # Solve origin + t d = p + s e for every (beam, segment) pair with 2-D cross products.
-    denom = d[:, None, 0] * e[None, :, 1] - d[:, None, 1] * e[None, :, 0]  # d x e, (N, W)
-    p_cross_e = p[:, 0] * e[:, 1] - p[:, 1] * e[:, 0]  # (W,)
-    p_cross_d = p[None, :, 0] * d[:, None, 1] - p[None, :, 1] * d[:, None, 0]  # (N, W)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        t = p_cross_e[None, :] / denom
-        s = p_cross_d / denom
-    hit = (denom != 0) & (t > 0) & (s >= 0) & (s <= 1)
-    distances = np.where(hit, t, np.inf).min(axis=1, initial=np.inf)
-    distances[distances > max_range] = np.inf
-    return distances
+
+    def __init__(self, segments: np.ndarray, bearings: np.ndarray, max_range: float):
+        segments = np.asarray(segments, dtype=float).reshape(-1, 4)
+        self.start_x, self.start_y = segments[:, 0], segments[:, 1]
+        self.vector_x, self.vector_y = segments[:, 2] - segments[:, 0], segments[:, 3] - segments[:, 1]
+        self.box_low = np.minimum(segments[:, :2], segments[:, 2:])
+        self.box_high = np.maximum(segments[:, :2], segments[:, 2:])
+        self.max_range = float(max_range)
+        self.bearings = np.asarray(bearings, dtype=float)
+        self._cos, self._sin = np.cos(self.bearings), np.sin(self.bearings)
+        positive = np.mod(self.bearings, TWO_PI)
+        self._order = np.argsort(positive)
+        self._sorted = np.concatenate([positive[self._order], positive[self._order] + TWO_PI])
+
+    def cast(self, x: float, y: float, heading: float) -> np.ndarray:
+        """Distances (N,) in metres from a sensor at (x, y) facing ``heading`` to the first wall
+        along each beam; ``inf`` where no wall lies within ``max_range``."""
+        gap = np.maximum(np.maximum(self.box_low - (x, y), (x, y) - self.box_high), 0.0)
+        near = np.flatnonzero(np.einsum("ij,ij->i", gap, gap) <= self.max_range**2)
+        px, py = self.start_x[near] - x, self.start_y[near] - y  # wall starts relative to the sensor
+        ex, ey = self.vector_x[near], self.vector_y[near]
+        segment, beam = self._beams_facing(px, py, px + ex, py + ey, heading)
+        cos_h, sin_h = math.cos(heading), math.sin(heading)
+        dx = (self._cos * cos_h - self._sin * sin_h)[beam]  # world beam directions, per pair
+        dy = (self._sin * cos_h + self._cos * sin_h)[beam]
+        px, py, ex, ey = px[segment], py[segment], ex[segment], ey[segment]
+        # Solve t d = p + s e for each (beam, segment) pair with 2-D cross products.
+        denom = dx * ey - dy * ex
+        denom[denom == 0] = np.inf  # parallel: t = s = 0, never a hit
+        t = (px * ey - py * ex) / denom
+        s = (px * dy - py * dx) / denom
+        hit = (t > 0) & (s >= 0) & (s <= 1) & (t <= self.max_range)
+        distances = np.full(len(self.bearings), np.inf)
+        np.minimum.at(distances, beam[hit], t[hit])
+        return distances
+
+    def _beams_facing(self, x1, y1, x2, y2, heading: float):
+        """Pairs ``(segment index, beam index)`` of every beam whose bearing lies within the angle a
+        segment (endpoints relative to the sensor, world axes) subtends, widened by ``ANGLE_MARGIN``."""
+        n = len(self.bearings)
+        a = np.mod(np.arctan2(y1, x1) - heading, TWO_PI)  # endpoint bearings in the sensor frame
+        b = np.mod(np.arctan2(y2, x2) - heading, TWO_PI)
+        width = np.mod(b - a, TWO_PI)
+        shorter_from_a = width <= np.pi  # a segment not through the sensor subtends less than pi
+        low = np.where(shorter_from_a, a, b) - ANGLE_MARGIN
+        high = low + np.where(shorter_from_a, width, TWO_PI - width) + 2 * ANGLE_MARGIN
+        first = np.searchsorted(self._sorted, low)
+        counts = np.minimum(np.searchsorted(self._sorted, high, side="right") - first, n)
+        segment = np.repeat(np.arange(len(x1)), counts)
+        position = np.arange(counts.sum()) + np.repeat(first - (np.cumsum(counts) - counts), counts)
+        return segment, self._order[position % n]
 
 
-def _segment_distance(p: np.ndarray, e: np.ndarray) -> np.ndarray:
-    """Distance from the origin to each segment ``p + s e``, s in [0, 1]; p, e shaped (W, 2)."""
-    length2 = np.einsum("ij,ij->i", e, e)
-    s = np.clip(-np.einsum("ij,ij->i", p, e) / np.where(length2 > 0, length2, 1), 0, 1)
-    closest = p + s[:, None] * e
-    return np.hypot(closest[:, 0], closest[:, 1])
+def cast_rays(origin, angles, segments: np.ndarray, max_range: float) -> np.ndarray:
+    """Distances (N,) from ``origin`` (2,) along world ``angles`` (N,) to the first of ``segments``
+    (W, 4) hit, ``inf`` beyond ``max_range``: a one-off ``RayCaster`` cast."""
+    return RayCaster(segments, angles, max_range).cast(float(origin[0]), float(origin[1]), 0.0)
 
 
 class VirtualLaser:
@@ -98,14 +142,16 @@ class VirtualLaser:
 
     def __init__(self, params: LaserParams, surfaces: np.ndarray):
         self.params = params
-        self.surfaces = np.asarray(surfaces, dtype=float).reshape(-1, 4)
         self.bearings = params.geometry.bearings(params.beams)  # (N,) robot frame, radians
+        self.mount = (params.mount_x, params.mount_y)
+        self.caster = RayCaster(surfaces, self.bearings, params.max_range)
 
     def true_ranges(self, pose: np.ndarray) -> np.ndarray:
         """Noise-free ranges (N,) from robot ``pose`` (x, y, theta), ``inf`` beyond ``max_range``."""
-        geometry = self.params.geometry
-        sensor = compose(pose, [geometry.mount_x, geometry.mount_y, 0.0])
-        return cast_rays(sensor[:2], sensor[2] + self.bearings, self.surfaces, self.params.max_range)
+        x, y, heading = (float(v) for v in pose)
+        cos_h, sin_h = math.cos(heading), math.sin(heading)
+        mount_x, mount_y = self.mount
+        return self.caster.cast(x + cos_h * mount_x - sin_h * mount_y, y + sin_h * mount_x + cos_h * mount_y, heading)
 
     def scan(self, pose: np.ndarray, rng: np.random.Generator) -> np.ndarray:
         """Noisy ranges (N,) as the sensor reports them: metres, 0 for no return."""

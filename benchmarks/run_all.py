@@ -1,0 +1,24 @@
+"""Run every benchmark and print one Markdown table (ratios are measured within this run)."""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+import pandas as pd
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+
+import bench_laser  # noqa: E402
+import bench_simulation  # noqa: E402
+
+
+def main() -> int:
+    tables = [pd.DataFrame([bench_laser.run()]), pd.DataFrame(bench_simulation.run())]
+    for table in tables:
+        print(table.set_index("benchmark").to_markdown(floatfmt=".3g"), end="\n\n")
+    return 0 if all(table["met"].all() for table in tables) else 1
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
