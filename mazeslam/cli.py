@@ -34,18 +34,23 @@ def main():
 @click.option("--beams", type=click.IntRange(min=2), help="Beams per scan (the exercise's N).")
 @click.option("--config", "config_path", type=click.Path(exists=True, dir_okay=False, path_type=Path),
               help="Simulator TOML config (see configs/simulation.toml).")
+@click.option("--commands", "commands_path", type=click.Path(exists=True, dir_okay=False, path_type=Path),
+              help="Drive open-loop from a file of 'duration speed turn_rate' lines instead of exploring.")
 @click.option("--quiet", is_flag=True, help="No progress bar.")
-def simulate(out, seed, maze, rows, cols, duration, beams, config_path, quiet):
+def simulate(out, seed, maze, rows, cols, duration, beams, config_path, commands_path, quiet):
     """Drive the simulated e-puck through a maze and write a course log with truth and map sidecars."""
+    from mazeslam.envs.policies import load_commands
     from mazeslam.envs.simulator import load_config, simulate as run_simulation
 
     config = _with_overrides(load_config(config_path), rows=rows, cols=cols, beams=beams)
-    result = run_simulation(out, config=config, maze=maze, seed=seed, duration=duration, progress=not quiet)
+    policy = load_commands(commands_path) if commands_path else None
+    result = run_simulation(out, config=config, maze=maze, seed=seed, duration=duration, policy=policy,
+                            progress=not quiet)
     click.echo(f"wrote {result.log_path} ({len(result.times)} records, {result.times[-1]:.1f} s simulated), "
                f"{result.truth_path}, {result.map_path}")
-    if duration is None and not result.tour_complete:
-        click.echo(f"warning: the exploration tour did not finish within max_duration "
-                   f"{config.max_duration} s", err=True)
+    if duration is None and not result.policy_finished:
+        click.echo(f"warning: the run stopped at max_duration {config.max_duration} s before its policy "
+                   f"finished", err=True)
 
 
 def _with_overrides(config, rows=None, cols=None, beams=None):
@@ -78,10 +83,26 @@ def info(log_file, lenient):
     if facts["scan_records"]:
         click.echo(f"  ranges            max {facts['max_range_m']:.3f} m, "
                    f"{100 * facts['no_return_fraction']:.1f} % no return")
+    _echo_sidecars(log_file)
     for skipped in course_log.skipped:
         click.echo(f"  skipped line {skipped.line}: {skipped.reason}")
     if course_log.skipped:
         click.echo(f"  {len(course_log.skipped)} line(s) skipped")
+
+
+def _echo_sidecars(log_file: Path) -> None:
+    """Name the truth and map sidecars beside a log, and the beam geometry the map records."""
+    from mazeslam import sidecars
+
+    truth, world = sidecars.truth_path(log_file), sidecars.map_path(log_file)
+    click.echo(f"  ground truth      {truth if truth.exists() else 'none'}")
+    if world.exists():
+        geometry = sidecars.beam_geometry(sidecars.read_map(world)["sensor"])
+        click.echo(f"  map               {world}: beam 0 at {geometry.first_beam_angle:+.4f} rad, "
+                   f"{'counter-clockwise' if geometry.direction > 0 else 'clockwise'}, "
+                   f"sensor at ({geometry.mount_x:.3f}, {geometry.mount_y:.3f}) m")
+    else:
+        click.echo("  map               none (beam convention not recorded)")
 
 
 @main.command()

@@ -42,7 +42,7 @@ def assert_scans_match_truth_and_map(log_path):
 def test_default_run_scans_agree_with_truth_and_map(default_run):
     course_log, truth, _ = assert_scans_match_truth_and_map(default_run.log_path)
     assert course_log.n_beams == 180
-    assert default_run.tour_complete
+    assert default_run.policy_finished
 
 
 def test_16x16_maze_scans_agree_with_truth_and_map(tmp_path):

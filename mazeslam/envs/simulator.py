@@ -104,7 +104,7 @@ class SimulationResult:
     times: np.ndarray
     poses: np.ndarray
     maze: Maze
-    tour_complete: bool
+    policy_finished: bool
 
 
 def simulate(
