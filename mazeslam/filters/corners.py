@@ -1,0 +1,313 @@
+"""Corner landmarks from a range scan: the exercise's ``extract_beacon`` and a stricter mode.
+
+A scan's ranges become points in the sensor frame (the beam geometry says along which bearing each
+range was measured); split-and-merge (``mazeslam.filters.lines``) cuts them into straight segments;
+each segment's end points are then classified by what lies beyond them in scan order:
+
+=============  ===========================================================================  ======
+kind           what it is                                                                   fixed?
+=============  ===========================================================================  ======
+``corner``     two neighbouring segments meet at a real angle: their lines' intersection    yes
+``wall_end``   the scan jumps to a farther surface: the wall ends here (a convex corner     yes
+               seen edge-on); placed where the line meets the ray between the two beams
+``occluded``   the scan jumps to a nearer surface: something in front hides the wall        no
+``gap``        the next beam has no return (or is outside the ranges used)                  no
+``edge``       the end of a field of view narrower than a full circle                       no
+``junction``   the next segment follows on without a real angle or a jump                   no
+=============  ===========================================================================  ======
+
+The exercise's mode (``mode="endpoints"``) reports every segment end point as an observation,
+whatever its kind; ``mode="corners"`` reports only the fixed ones, ``corner`` and ``wall_end``:
+points of the world that look the same from wherever the robot sees them.
+
+Every observation is given in the robot frame (the sensor's mounting offset added) as x, y and as
+range, bearing, each with a covariance propagated from the line fits.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from mazeslam.beams import BeamGeometry
+from mazeslam.config import require
+from mazeslam.filters.lines import LineParams, LineSegment, SplitAndMerge
+
+FIXED_KINDS = ("corner", "wall_end")
+
+
+@dataclass(frozen=True)
+class CornerParams:
+    """Corner extraction settings (lengths in metres, angles in degrees).
+
+    Attributes:
+        lines: split-and-merge settings.
+        min_range, max_range: ranges used; others count as no return (the exercise trusts only
+            part of its camera's range).
+        min_corner_angle: two neighbouring lines form a corner when they differ by at least this
+            much (and at most 180 minus it).
+        max_corner_gap: the intersection of two lines must lie within this distance (plus the gap
+            between their facing end points) of both facing end points, or it is no corner.
+        max_skipped_points: neighbouring segments of one run may form a corner across this many
+            points that belong to neither (too few for a segment of their own).
+        max_end_spacing: a wall end is reported only where neighbouring beams land at most this far
+            apart on the wall; at grazing angles the end could lie anywhere in a wider stretch.
+        mode: ``"corners"`` (fixed landmarks only) or ``"endpoints"`` (every segment end point, as
+            the exercise's extract_beacon).
+    """
+
+    lines: LineParams = field(default_factory=LineParams)
+    min_range: float = 0.02
+    max_range: float = math.inf
+    min_corner_angle: float = 30.0
+    max_corner_gap: float = 0.03
+    max_skipped_points: int = 3
+    max_end_spacing: float = 0.02
+    mode: str = "corners"
+
+    def __post_init__(self):
+        require(0 <= self.min_range < self.max_range,
+                f"corner min_range {self.min_range} must be >= 0 and below max_range {self.max_range}")
+        require(0 < self.min_corner_angle <= 90, f"min_corner_angle must be in (0, 90] degrees, got {self.min_corner_angle}")
+        require(self.max_corner_gap > 0, f"max_corner_gap must be positive, got {self.max_corner_gap}")
+        require(self.max_skipped_points >= 0, f"max_skipped_points must be >= 0, got {self.max_skipped_points}")
+        require(self.max_end_spacing > 0, f"max_end_spacing must be positive, got {self.max_end_spacing}")
+        require(self.mode in ("corners", "endpoints"), f"mode must be 'corners' or 'endpoints', got {self.mode!r}")
+
+
+@dataclass(slots=True)
+class CornerObservation:
+    """One landmark observation in the robot frame.
+
+    Attributes:
+        x, y: position, metres (robot frame: x forward, y left).
+        range, bearing: the same as range (m) and bearing (rad, counter-clockwise from forward).
+        kind: see the module's table.
+        covariance_xy: (2, 2) covariance of (x, y), m^2.
+        covariance_rb: (2, 2) covariance of (range, bearing).
+        beam: index of the beam nearest to it.
+    """
+
+    x: float
+    y: float
+    range: float
+    bearing: float
+    kind: str
+    covariance_xy: np.ndarray
+    covariance_rb: np.ndarray
+    beam: int
+
+    @property
+    def fixed(self) -> bool:
+        return self.kind in FIXED_KINDS
+
+
+@dataclass
+class ScanFeatures:
+    """What one scan yields: its points, lines and observations (sensor-frame geometry, robot-frame landmarks).
+
+    Attributes:
+        points: (P, 2) the valid scan points in scan order, sensor frame, metres.
+        beams: (P,) the beam index of each point.
+        segments: the extracted lines, in scan order (positions index ``points``).
+        observations: corners and/or end points, robot frame.
+    """
+
+    points: np.ndarray
+    beams: np.ndarray
+    segments: list[LineSegment]
+    observations: list[CornerObservation]
+
+    def observation_array(self) -> np.ndarray:
+        """(K, 2) observation ranges and bearings, the filter's input."""
+        return np.array([[o.range, o.bearing] for o in self.observations]).reshape(-1, 2)
+
+
+class CornerExtractor:
+    """Extracts lines and corner observations from scans of a fixed beam geometry.
+
+    ``extract(ranges)`` takes one scan (N,) in metres (0 = no return) and returns ``ScanFeatures``.
+    """
+
+    def __init__(self, geometry: BeamGeometry, n_beams: int, params: CornerParams | None = None):
+        self.geometry = geometry
+        self.params = params or CornerParams()
+        self.n_beams = n_beams
+        self.step = geometry.angle_step(n_beams)
+        self.bearings = geometry.bearings(n_beams)
+        self._cos, self._sin = np.cos(self.bearings), np.sin(self.bearings)
+        self._indices = np.arange(n_beams)
+        self._splitter = SplitAndMerge(self.params.lines)
+        lam = math.radians(self.params.lines.breakpoint_angle)
+        self._breakpoint_gain = math.sin(self.step) / math.sin(max(lam - self.step, 1e-6))
+        self._mount = np.array([geometry.mount_x, geometry.mount_y])
+        lines = self.params.lines
+        self._on_line = lines.split_threshold + 3 * lines.range_noise_std  # a point this near a line is on it
+
+    def extract(self, ranges) -> ScanFeatures:
+        ranges = np.asarray(ranges, dtype=float)
+        if ranges.shape != (self.n_beams,):
+            raise ValueError(f"expected a scan of {self.n_beams} ranges, got shape {ranges.shape}")
+        p = self.params
+        valid = (ranges >= p.min_range) & (ranges <= p.max_range) & (ranges > 0)
+        breaks = self._breaks(ranges, valid)
+        closed = not breaks.any()
+        # Scan order starts just after a break, so that no run wraps around the end. A closed loop
+        # (a room seen all round) is cut where a first pass finds two segments meeting.
+        start = int(np.argmax(breaks)) + 1 if not closed else int(np.argmin(ranges))
+        beams, points, runs, segments = self._segments(ranges, valid, breaks, start)
+        if closed and len(segments) > 1:
+            beams, points, runs, segments = self._segments(ranges, valid, breaks, int(beams[segments[1].first]))
+        observations = self._observations(ranges, valid, breaks, beams, segments, runs, closed)
+        return ScanFeatures(points, beams, segments, observations)
+
+    def _segments(self, ranges, valid, breaks, start: int):
+        """Split-and-merge in scan order from beam ``start``: (beams (P,), points (P, 2), runs, segments)."""
+        order = (self._indices + start) % self.n_beams
+        beams = order[valid[order]]
+        points = np.column_stack([ranges[beams] * self._cos[beams], ranges[beams] * self._sin[beams]])
+        cut = np.flatnonzero(breaks[beams[:-1]]) + 1  # positions that start a new run
+        runs = list(zip(np.concatenate([[0], cut]).tolist(), np.concatenate([cut - 1, [len(beams) - 1]]).tolist()))
+        return beams, points, runs, self._splitter.segment(points, runs) if len(beams) else []
+
+    def _breaks(self, ranges: np.ndarray, valid: np.ndarray) -> np.ndarray:
+        """(N,) True where beam k and the next beam in scan order do not lie on one surface: either
+        has no return, or their points are farther apart than the adaptive breakpoint distance
+        ``r sin(step) / sin(lambda - step) + 3 sigma``. The last beam of a fan always breaks."""
+        following = np.roll(self._indices, -1)
+        x, y = ranges * self._cos, ranges * self._sin
+        spacing = np.hypot(x[following] - x, y[following] - y)
+        allowed = ranges * self._breakpoint_gain + 3 * self.params.lines.range_noise_std
+        breaks = ~valid | ~valid[following] | (spacing > allowed)
+        if not self.geometry.is_full_circle:
+            breaks[-1] = True
+        return breaks
+
+    def _observations(self, ranges, valid, breaks, beams, segments, runs, closed) -> list[CornerObservation]:
+        run_of = np.zeros(len(beams), dtype=int)
+        for index, (first, last) in enumerate(runs):
+            run_of[first : last + 1] = index
+        pairs = [(i, i + 1, segments[i + 1].first - segments[i].last - 1, run_of[segments[i].last] == run_of[segments[i + 1].first])
+                 for i in range(len(segments) - 1)]
+        if closed and len(segments) > 1:  # the loop closes: the last segment meets the first
+            pairs.append((len(segments) - 1, 0, len(beams) - 1 - segments[-1].last + segments[0].first, True))
+        observations = []
+        corner_after, corner_before = [False] * len(segments), [False] * len(segments)
+        for i, j, skipped, same_run in pairs:
+            if same_run and skipped <= self.params.max_skipped_points:
+                corner = self._corner(segments[i], segments[j])
+                if corner is not None:
+                    corner_after[i] = corner_before[j] = True
+                    if self.params.mode == "corners":
+                        observations.append(self._observation(*corner, "corner", beams[segments[i].last]))
+        for i, segment in enumerate(segments):
+            for at_start in (True, False):
+                position = segment.first if at_start else segment.last
+                has_corner = corner_before[i] if at_start else corner_after[i]
+                kind = "corner" if has_corner else self._end_kind(ranges, valid, breaks, beams[position], at_start,
+                                                                  segment)
+                if self.params.mode == "endpoints":
+                    point = segment.start if at_start else segment.end
+                    observations.append(self._observation(point, self._end_covariance(segment, point), kind,
+                                                          beams[position]))
+                elif kind == "wall_end":
+                    end = self._wall_end(segment, beams[position], at_start)
+                    if end is not None:
+                        observations.append(self._observation(*end, kind, beams[position]))
+        return observations
+
+    def _end_kind(self, ranges, valid, breaks, beam: int, at_start: bool, segment: LineSegment) -> str:
+        """Classify a segment end point by the beams just beyond it in scan order.
+
+        Across a break, a farther surface makes the end a wall end, a nearer one an occlusion; but a
+        point beyond the break that lies on the segment's own line means the same wall goes on
+        (sparse beams at a grazing angle): no landmark. One point right beyond the end that belongs
+        to no segment (the thin end face of a wall) may precede the break: up to
+        ``max_skipped_points`` of them, within ``max_corner_gap`` of the end.
+        """
+        step = -1 if at_start else 1
+        previous = beam
+        end_point = self._point(ranges, beam)
+        for hop in range(1, self.params.max_skipped_points + 2):
+            neighbour = beam + step * hop
+            if not self.geometry.is_full_circle and not 0 <= neighbour < self.n_beams:
+                return "edge"
+            neighbour %= self.n_beams
+            if not valid[neighbour]:
+                return "gap"
+            if breaks[previous if step > 0 else neighbour]:
+                point = self._point(ranges, neighbour)
+                if abs(point @ segment.normal - segment.r) <= self._on_line:
+                    return "junction"
+                return "wall_end" if ranges[neighbour] > ranges[previous] else "occluded"
+            if math.dist(self._point(ranges, neighbour), end_point) > self.params.max_corner_gap:
+                break
+            previous = neighbour
+        return "junction"
+
+    def _point(self, ranges, beam: int) -> np.ndarray:
+        return ranges[beam] * np.array([self._cos[beam], self._sin[beam]])
+
+    def _corner(self, a: LineSegment, b: LineSegment):
+        """Intersection (2,) and its covariance of two neighbouring segments meeting at a real angle, or None."""
+        difference = abs(math.remainder(a.alpha - b.alpha, math.pi))  # lines: alpha modulo pi
+        if difference < math.radians(self.params.min_corner_angle):
+            return None
+        # Solve [n_a; n_b] p = [r_a; r_b] (Cramer's rule).
+        (ca, sa), (cb, sb) = (math.cos(a.alpha), math.sin(a.alpha)), (math.cos(b.alpha), math.sin(b.alpha))
+        determinant = ca * sb - sa * cb
+        point = np.array([(a.r * sb - b.r * sa) / determinant, (ca * b.r - cb * a.r) / determinant])
+        gap = self.params.max_corner_gap + math.dist(a.end, b.start)  # the beams may straddle the corner
+        if math.dist(point, a.end) > gap or math.dist(point, b.start) > gap:
+            return None
+        # Each line contributes a residual dr - (t . p) dalpha; the two are independent.
+        variances = []
+        for segment in (a, b):
+            u = np.array([1.0, -(segment.direction @ point)])
+            variances.append(u @ segment.covariance @ u)
+        inverse = np.array([[sb, -sa], [-cb, ca]]) / determinant
+        return point, (inverse * variances) @ inverse.T
+
+    def _wall_end(self, segment: LineSegment, beam: int, at_start: bool):
+        """Where a wall ends between its last beam and the next: the line meets the ray halfway.
+
+        Returns ``(point (2,), covariance (2, 2))``, or None when the two beams land farther apart on
+        the line than ``max_end_spacing`` (a wall seen at a grazing angle: its end is too vague).
+        """
+        direction = self.geometry.direction * (-1 if at_start else 1)
+        bearing = self.bearings[beam] + direction * 0.5 * self.step
+        ray = np.array([math.cos(bearing), math.sin(bearing)])
+        facing = abs(ray @ segment.normal)  # cosine of the angle of incidence
+        if facing < 1e-6:
+            return None
+        distance = segment.r / (ray @ segment.normal)
+        if distance <= 0:
+            return None
+        stretch = distance * self.step / facing  # how far apart two beams land on the line here
+        if stretch > self.params.max_end_spacing:
+            return None
+        point = distance * ray
+        # The wall ends somewhere between the two beams: uniform over that stretch of the line.
+        covariance = self._end_covariance(segment, point, along_var=stretch**2 / 12)
+        return point, covariance
+
+    def _end_covariance(self, segment: LineSegment, point, along_var: float | None = None) -> np.ndarray:
+        """Covariance (2, 2) of a point on a segment's line: the fit's offset across it, and along it
+        ``along_var`` (default: a quarter of the beam spacing there, squared)."""
+        s = float(point @ segment.direction)
+        across = np.array([1.0, -s]) @ segment.covariance @ np.array([1.0, -s])
+        if along_var is None:
+            facing = max(abs(segment.normal @ point) / max(math.hypot(*point), 1e-9), 0.1)
+            along_var = (0.25 * math.hypot(*point) * self.step / facing) ** 2
+        n, t = segment.normal, segment.direction
+        return across * np.outer(n, n) + along_var * np.outer(t, t)
+
+    def _observation(self, point_sensor, covariance_xy, kind: str, beam: int) -> CornerObservation:
+        x, y = point_sensor[0] + self._mount[0], point_sensor[1] + self._mount[1]
+        rng2 = x * x + y * y
+        rng = math.sqrt(rng2)
+        jacobian = np.array([[x / rng, y / rng], [-y / rng2, x / rng2]])  # d(range, bearing)/d(x, y)
+        return CornerObservation(float(x), float(y), rng, math.atan2(y, x), kind, covariance_xy,
+                                 jacobian @ covariance_xy @ jacobian.T, int(beam))
