@@ -3,20 +3,25 @@
 from __future__ import annotations
 
 import sys
+import tempfile
 from pathlib import Path
 
 import pandas as pd
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
+import bench_corners  # noqa: E402
 import bench_laser  # noqa: E402
 import bench_simulation  # noqa: E402
 
 
 def main() -> int:
-    tables = [pd.DataFrame([bench_laser.run()]), pd.DataFrame(bench_simulation.run())]
-    for table in tables:
-        print(table.set_index("benchmark").to_markdown(floatfmt=".3g"), end="\n\n")
+    with tempfile.TemporaryDirectory() as folder:
+        tables = [pd.DataFrame([bench_laser.run()]), pd.DataFrame(bench_simulation.run()),
+                  pd.DataFrame([bench_corners.speed(Path(folder))])]
+        for table in tables:
+            print(table.set_index("benchmark").to_markdown(floatfmt=".3g"), end="\n\n")
+        print(bench_corners.quality(Path(folder)).to_markdown(floatfmt=".4f"))
     return 0 if all(table["met"].all() for table in tables) else 1
 
 

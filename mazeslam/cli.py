@@ -105,6 +105,55 @@ def _echo_sidecars(log_file: Path) -> None:
         click.echo("  map               none (beam convention not recorded)")
 
 
+def beam_geometry_options(function):
+    """The options that override a log's beam geometry (for every command that reads scans)."""
+    options = [
+        click.option("--first-beam-angle", type=float, help="Bearing of beam 0 in the robot frame [rad]."),
+        click.option("--beam-direction", type=click.Choice(["1", "-1"]),
+                     help="1: bearings grow counter-clockwise with the beam index; -1: clockwise."),
+        click.option("--mount-x", type=float, help="Sensor ahead of the wheel axle [m] (CAMERA_POS_DX)."),
+    ]
+    for option in reversed(options):
+        function = option(function)
+    return function
+
+
+def _geometry_overrides(first_beam_angle, beam_direction, mount_x) -> dict:
+    return {"first_beam_angle": first_beam_angle, "mount_x": mount_x,
+            "direction": int(beam_direction) if beam_direction else None}
+
+
+@main.command()
+@click.argument("log_file", type=click.Path(exists=True, dir_okay=False, path_type=Path))
+@click.option("--scan", "scan_number", type=click.IntRange(min=0), default=0, show_default=True,
+              help="Which scan to draw (0 = the log's first scan).")
+@click.option("--plot", "plot_path", type=click.Path(dir_okay=False, path_type=Path),
+              help="Draw that scan: points, lines in colours, corners in green (PNG/PDF/SVG).")
+@click.option("--animate", "animation_path", type=click.Path(dir_okay=False, path_type=Path),
+              help="Draw every scan into an animation (GIF).")
+@click.option("--json", "json_path", type=click.Path(dir_okay=False, path_type=Path),
+              help="Write every scan's lines and observations as JSON.")
+@click.option("--config", "config_path", type=click.Path(exists=True, dir_okay=False, path_type=Path),
+              help="Corner extraction TOML (see configs/corners/).")
+@click.option("--mode", type=click.Choice(["corners", "endpoints"]),
+              help="corners: fixed landmarks only; endpoints: every segment end (the exercise).")
+@beam_geometry_options
+def corners(log_file, scan_number, plot_path, animation_path, json_path, config_path, mode, first_beam_angle,
+            beam_direction, mount_x):
+    """Extract lines and corners from a log's scans (course log or CARMEN log)."""
+    from mazeslam.evaluation.corner_report import CornerReport
+
+    report = CornerReport.from_log(log_file, config_path, mode,
+                                   _geometry_overrides(first_beam_angle, beam_direction, mount_x))
+    click.echo(report.summary())
+    if plot_path:
+        click.echo(f"figure: {report.plot(scan_number, plot_path)}")
+    if animation_path:
+        click.echo(f"animation: {report.animate(animation_path)}")
+    if json_path:
+        click.echo(f"json: {report.write_json(json_path)}")
+
+
 @main.command()
 @click.option("--out", "out_dir", type=click.Path(file_okay=False, path_type=Path), default=Path("runs/demo"),
               show_default=True, help="Folder for the log, sidecars, table and figure.")

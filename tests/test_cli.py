@@ -4,6 +4,7 @@ import sys
 import pytest
 from click.testing import CliRunner
 
+from conftest import PROJECT_ROOT
 from mazeslam import log, sidecars
 from mazeslam.cli import main
 
@@ -62,6 +63,43 @@ def test_demo_prints_ate_table_and_writes_plot(tmp_path):
     assert (tmp_path / "demo" / "ate.csv").exists()
 
 
-@pytest.mark.parametrize("command", ["simulate", "info", "demo"])
+@pytest.mark.parametrize("command", ["simulate", "info", "demo", "corners"])
 def test_help(command):
     assert invoke(command, "--help").exit_code == 0
+
+
+def test_corners_command_plots_and_writes_json(default_run, tmp_path):
+    result = invoke("corners", default_run.log_path, "--scan", 3, "--plot", tmp_path / "scan.png",
+                    "--json", tmp_path / "corners.json")
+    assert result.exit_code == 0, result.output
+    assert "sidecar" in result.output  # the beam geometry came from the map sidecar
+    assert (tmp_path / "scan.png").stat().st_size > 10_000
+    import json
+
+    document = json.loads((tmp_path / "corners.json").read_text())
+    course_log = log.read(default_run.log_path)
+    assert len(document["scans"]) == int(course_log.is_scan.sum())
+    kinds = {o["kind"] for scan in document["scans"] for o in scan["observations"]}
+    assert kinds <= {"corner", "wall_end"}
+    assert document["parameters"]["max_range"] is None  # infinite: no limit
+
+
+def test_corners_endpoint_mode_and_animation(default_run, tmp_path):
+    result = invoke("corners", default_run.log_path, "--mode", "endpoints", "--animate", tmp_path / "a.gif")
+    assert result.exit_code == 0, result.output
+    assert "mode             endpoints" in result.output
+    assert (tmp_path / "a.gif").read_bytes()[:3] == b"GIF"
+
+
+def test_corners_refuses_a_scan_that_does_not_exist(default_run, tmp_path):
+    process = subprocess.run([sys.executable, "-m", "mazeslam.cli", "corners", str(default_run.log_path),
+                              "--scan", "100000", "--plot", str(tmp_path / "x.png")], capture_output=True, text=True)
+    assert process.returncode == 2
+    assert "scan 100000 does not exist" in process.stderr
+
+
+def test_corners_on_the_exercise_robot_log(course_log_path, tmp_path):
+    result = invoke("corners", course_log_path, "--config", PROJECT_ROOT / "configs" / "corners" / "course.toml",
+                    "--first-beam-angle", 0, "--mount-x", 0.11)
+    assert result.exit_code == 0, result.output
+    assert "overridden by first_beam_angle, mount_x" in result.output

@@ -142,7 +142,7 @@ class CornerExtractor:
         self._splitter = SplitAndMerge(self.params.lines)
         lam = math.radians(self.params.lines.breakpoint_angle)
         self._breakpoint_gain = math.sin(self.step) / math.sin(max(lam - self.step, 1e-6))
-        self._mount = np.array([geometry.mount_x, geometry.mount_y])
+        self._mount_x, self._mount_y = geometry.mount_x, geometry.mount_y
         lines = self.params.lines
         self._on_line = lines.split_threshold + 3 * lines.range_noise_std  # a point this near a line is on it
 
@@ -201,7 +201,9 @@ class CornerExtractor:
                 if corner is not None:
                     corner_after[i] = corner_before[j] = True
                     if self.params.mode == "corners":
-                        observations.append(self._observation(*corner, "corner", beams[segments[i].last]))
+                        point, covariance = corner
+                        observations.append(self._observation(point, np.array(covariance), "corner",
+                                                              beams[segments[i].last]))
         for i, segment in enumerate(segments):
             for at_start in (True, False):
                 position = segment.first if at_start else segment.last
@@ -258,56 +260,72 @@ class CornerExtractor:
         # Solve [n_a; n_b] p = [r_a; r_b] (Cramer's rule).
         (ca, sa), (cb, sb) = (math.cos(a.alpha), math.sin(a.alpha)), (math.cos(b.alpha), math.sin(b.alpha))
         determinant = ca * sb - sa * cb
-        point = np.array([(a.r * sb - b.r * sa) / determinant, (ca * b.r - cb * a.r) / determinant])
+        x, y = (a.r * sb - b.r * sa) / determinant, (ca * b.r - cb * a.r) / determinant
         gap = self.params.max_corner_gap + math.dist(a.end, b.start)  # the beams may straddle the corner
-        if math.dist(point, a.end) > gap or math.dist(point, b.start) > gap:
+        if math.dist((x, y), a.end) > gap or math.dist((x, y), b.start) > gap:
             return None
-        # Each line contributes a residual dr - (t . p) dalpha; the two are independent.
-        variances = []
-        for segment in (a, b):
-            u = np.array([1.0, -(segment.direction @ point)])
-            variances.append(u @ segment.covariance @ u)
-        inverse = np.array([[sb, -sa], [-cb, ca]]) / determinant
-        return point, (inverse * variances) @ inverse.T
+        # Each line contributes a residual dr - (t . p) dalpha, t = (-sin, cos); the two are independent.
+        va = _line_offset_variance(a.covariance, -sa * x + ca * y)
+        vb = _line_offset_variance(b.covariance, -sb * x + cb * y)
+        inverse = (sb / determinant, -sa / determinant, -cb / determinant, ca / determinant)
+        return (x, y), _sandwich(inverse, ((va, 0.0), (0.0, vb)))
 
     def _wall_end(self, segment: LineSegment, beam: int, at_start: bool):
         """Where a wall ends between its last beam and the next: the line meets the ray halfway.
 
-        Returns ``(point (2,), covariance (2, 2))``, or None when the two beams land farther apart on
-        the line than ``max_end_spacing`` (a wall seen at a grazing angle: its end is too vague).
+        Returns ``(point, covariance (2, 2))``, or None when the two beams land farther apart on the
+        line than ``max_end_spacing`` (a wall seen at a grazing angle: its end is too vague).
         """
         direction = self.geometry.direction * (-1 if at_start else 1)
-        bearing = self.bearings[beam] + direction * 0.5 * self.step
-        ray = np.array([math.cos(bearing), math.sin(bearing)])
-        facing = abs(ray @ segment.normal)  # cosine of the angle of incidence
-        if facing < 1e-6:
+        bearing = float(self.bearings[beam]) + direction * 0.5 * self.step
+        ray_x, ray_y = math.cos(bearing), math.sin(bearing)
+        c, s = math.cos(segment.alpha), math.sin(segment.alpha)
+        along_normal = ray_x * c + ray_y * s  # cosine of the angle of incidence (signed)
+        if abs(along_normal) < 1e-6 or segment.r / along_normal <= 0:
             return None
-        distance = segment.r / (ray @ segment.normal)
-        if distance <= 0:
-            return None
-        stretch = distance * self.step / facing  # how far apart two beams land on the line here
+        distance = segment.r / along_normal
+        stretch = distance * self.step / abs(along_normal)  # how far apart two beams land on the line here
         if stretch > self.params.max_end_spacing:
             return None
-        point = distance * ray
+        point = (distance * ray_x, distance * ray_y)
         # The wall ends somewhere between the two beams: uniform over that stretch of the line.
-        covariance = self._end_covariance(segment, point, along_var=stretch**2 / 12)
-        return point, covariance
+        return point, self._end_covariance(segment, point, along_var=stretch**2 / 12)
 
     def _end_covariance(self, segment: LineSegment, point, along_var: float | None = None) -> np.ndarray:
         """Covariance (2, 2) of a point on a segment's line: the fit's offset across it, and along it
         ``along_var`` (default: a quarter of the beam spacing there, squared)."""
-        s = float(point @ segment.direction)
-        across = np.array([1.0, -s]) @ segment.covariance @ np.array([1.0, -s])
+        c, s = math.cos(segment.alpha), math.sin(segment.alpha)
+        x, y = point
+        across = _line_offset_variance(segment.covariance, -s * x + c * y)
         if along_var is None:
-            facing = max(abs(segment.normal @ point) / max(math.hypot(*point), 1e-9), 0.1)
-            along_var = (0.25 * math.hypot(*point) * self.step / facing) ** 2
-        n, t = segment.normal, segment.direction
-        return across * np.outer(n, n) + along_var * np.outer(t, t)
+            distance = max(math.hypot(x, y), 1e-9)
+            facing = max(abs(c * x + s * y) / distance, 0.1)
+            along_var = (0.25 * distance * self.step / facing) ** 2
+        # across n n^T + along t t^T with n = (c, s), t = (-s, c)
+        return np.array([[across * c * c + along_var * s * s, (across - along_var) * c * s],
+                         [(across - along_var) * c * s, across * s * s + along_var * c * c]])
 
     def _observation(self, point_sensor, covariance_xy, kind: str, beam: int) -> CornerObservation:
-        x, y = point_sensor[0] + self._mount[0], point_sensor[1] + self._mount[1]
+        x, y = float(point_sensor[0]) + self._mount_x, float(point_sensor[1]) + self._mount_y
         rng2 = x * x + y * y
         rng = math.sqrt(rng2)
-        jacobian = np.array([[x / rng, y / rng], [-y / rng2, x / rng2]])  # d(range, bearing)/d(x, y)
-        return CornerObservation(float(x), float(y), rng, math.atan2(y, x), kind, covariance_xy,
-                                 jacobian @ covariance_xy @ jacobian.T, int(beam))
+        jacobian = (x / rng, y / rng, -y / rng2, x / rng2)  # d(range, bearing)/d(x, y)
+        covariance_xy = np.asarray(covariance_xy)
+        return CornerObservation(x, y, rng, math.atan2(y, x), kind, covariance_xy,
+                                 np.array(_sandwich(jacobian, covariance_xy.tolist())), int(beam))
+
+
+def _line_offset_variance(covariance: np.ndarray, along: float) -> float:
+    """Variance of a line's offset dr - along * dalpha at along-line coordinate ``along``."""
+    (vr, c), (_, va) = covariance.tolist()
+    return vr - 2 * along * c + along * along * va
+
+
+def _sandwich(j, covariance) -> tuple[tuple[float, float], tuple[float, float]]:
+    """J C J^T for J = ((j0, j1), (j2, j3)) given as (j0, j1, j2, j3) and C a 2x2 nested sequence."""
+    j0, j1, j2, j3 = j
+    (c00, c01), (c10, c11) = covariance
+    a00, a01 = j0 * c00 + j1 * c10, j0 * c01 + j1 * c11
+    a10, a11 = j2 * c00 + j3 * c10, j2 * c01 + j3 * c11
+    cross = a00 * j2 + a01 * j3
+    return ((a00 * j0 + a01 * j1, cross), (cross, a10 * j2 + a11 * j3))

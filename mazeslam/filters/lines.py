@@ -140,7 +140,7 @@ class SplitAndMerge:
         x, y = points[:, 0], points[:, 1]
         columns = np.column_stack([x, y, x * x, y * y, x * y])
         # Row k: the sums of x, y, x^2, y^2, xy over positions before k (Python floats: fast scalars).
-        self._sums = np.vstack([np.zeros(5), np.cumsum(columns, axis=0)]).tolist()
+        self._sums = [[0.0] * 5] + np.cumsum(columns, axis=0).tolist()
         spans = []
         for first, last in runs:
             if last - first + 1 >= p.min_points:
@@ -160,6 +160,12 @@ class SplitAndMerge:
 
     def _distances(self, first: int, last: int, r: float, alpha: float) -> np.ndarray:
         return np.abs(self._points[first : last + 1] @ (math.cos(alpha), math.sin(alpha)) - r)
+
+    def _distance(self, k: int, line: tuple[float, float]) -> float:
+        """Distance of point k to the line ``(r, alpha)``."""
+        x, y = self._points[k].tolist()
+        r, alpha = line
+        return abs(x * math.cos(alpha) + y * math.sin(alpha) - r)
 
     def _split(self, first: int, last: int) -> list[tuple[int, int]]:
         """Algorithm 1, steps 2-5: split at the farthest point until every set fits its line.
@@ -185,8 +191,8 @@ class SplitAndMerge:
         """Split a..b at point k, which joins the side whose line (fitted without it) it is nearer to."""
         if k - a < 2 or b - k < 2:
             return [(a, k), (k + 1, b)]
-        to_left = self._distances(k, k, *self._fit(a, k - 1))[0]
-        to_right = self._distances(k, k, *self._fit(k + 1, b))[0]
+        to_left = self._distance(k, self._fit(a, k - 1))
+        to_right = self._distance(k, self._fit(k + 1, b))
         return [(a, k), (k + 1, b)] if to_left <= to_right else [(a, k - 1), (k, b)]
 
     def _refine_boundaries(self, spans: list[tuple[int, int]]) -> list[tuple[int, int]]:
@@ -197,17 +203,14 @@ class SplitAndMerge:
         """
         spans = list(spans)
         for i in range(len(spans) - 1):
-            for _ in range(2):
-                (a, b), (c, d) = spans[i], spans[i + 1]
-                if c != b + 1 or b - a < 2 or d - c < 2:
-                    break
-                left, right = self._fit(a, b - 1), self._fit(c + 1, d)
-                if self._distances(b, b, *right)[0] < self._distances(b, b, *left)[0]:
-                    spans[i], spans[i + 1] = (a, b - 1), (b, d)
-                elif self._distances(c, c, *left)[0] < self._distances(c, c, *right)[0]:
-                    spans[i], spans[i + 1] = (a, c), (c + 1, d)
-                else:
-                    break
+            (a, b), (c, d) = spans[i], spans[i + 1]
+            if c != b + 1 or b - a < 2 or d - c < 2:
+                continue
+            left, right = self._fit(a, b - 1), self._fit(c + 1, d)
+            if self._distance(b, right) < self._distance(b, left):
+                spans[i], spans[i + 1] = (a, b - 1), (b, d)
+            elif self._distance(c, left) < self._distance(c, right):
+                spans[i], spans[i + 1] = (a, c), (c + 1, d)
         return spans
 
     def _merge(self, spans: list[tuple[int, int]]) -> list[tuple[int, int]]:

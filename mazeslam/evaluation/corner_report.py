@@ -1,0 +1,121 @@
+"""``mazeslam corners``: lines and corners of every scan of a log, as a summary, figures and JSON."""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+import math
+from collections import Counter
+from dataclasses import dataclass
+from pathlib import Path
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+from matplotlib.animation import FuncAnimation, PillowWriter  # noqa: E402
+from tqdm.auto import tqdm  # noqa: E402
+
+from mazeslam.config import load_toml  # noqa: E402
+from mazeslam.evaluation.corner_plots import draw_scan, plot_scan  # noqa: E402
+from mazeslam.filters.corners import CornerExtractor, CornerParams, ScanFeatures  # noqa: E402
+from mazeslam.scans import ScanSet, load_scans  # noqa: E402
+
+
+@dataclass
+class CornerReport:
+    """Features of every scan of one log."""
+
+    scans: ScanSet
+    params: CornerParams
+    features: list[ScanFeatures]
+
+    @classmethod
+    def from_log(cls, path, config_path=None, mode: str | None = None, geometry_overrides: dict | None = None,
+                 progress: bool = True) -> CornerReport:
+        params = load_toml(CornerParams, config_path) if config_path else CornerParams()
+        if mode:
+            params = dataclasses.replace(params, mode=mode)
+        scans = load_scans(path, geometry_overrides)
+        extractor = CornerExtractor(scans.geometry, scans.n_beams, params)
+        features = [extractor.extract(ranges)
+                    for ranges in tqdm(scans.ranges, desc="corners", unit="scan", disable=not progress)]
+        return cls(scans, params, features)
+
+    def summary(self) -> str:
+        kinds = Counter(o.kind for f in self.features for o in f.observations)
+        n = len(self.features)
+        lines = sum(len(f.segments) for f in self.features)
+        g = self.scans.geometry
+        per_kind = ", ".join(f"{kind} {count / n:.2f}" for kind, count in sorted(kinds.items())) or "none"
+        return "\n".join([
+            f"{self.scans.source}: {n} scans of {self.scans.n_beams} beams",
+            f"  beam geometry    beam 0 at {g.first_beam_angle:+.4f} rad, direction {g.direction:+d}, "
+            f"field of view {g.field_of_view:.4f} rad, sensor at ({g.mount_x:.3f}, {g.mount_y:.3f}) m "
+            f"[{self.scans.geometry_origin}]",
+            f"  mode             {self.params.mode}",
+            f"  per scan         {lines / n:.2f} lines; observations: {per_kind}",
+        ])
+
+    def _title(self, index: int) -> str:
+        return (f"{Path(self.scans.source).name}: scan {index} (record {self.scans.records[index]}, "
+                f"t = {self.scans.times[index]:.2f} s)")
+
+    def plot(self, index: int, path) -> Path:
+        if index >= len(self.features):
+            raise ValueError(f"scan {index} does not exist: the log has {len(self.features)} scans (0..{len(self.features) - 1})")
+        mount = (self.scans.geometry.mount_x, self.scans.geometry.mount_y)
+        return plot_scan(path, self.features[index], mount, self._title(index))
+
+    def animate(self, path, frames_per_second: float = 4.0) -> Path:
+        """Every scan in turn, in one GIF, with fixed axes so the view does not jump."""
+        mount = (self.scans.geometry.mount_x, self.scans.geometry.mount_y)
+        fig, ax = plt.subplots(figsize=(6, 6))
+        reach = 1.05 * max((float(abs(f.points).max()) for f in self.features if len(f.points)), default=1.0)
+
+        def draw(index):
+            ax.clear()
+            draw_scan(ax, self.features[index], mount)
+            ax.set_xlim(-reach, reach)
+            ax.set_ylim(-reach, reach)
+            ax.set_title(self._title(index), fontsize=9)
+
+        animation = FuncAnimation(fig, draw, frames=len(self.features))
+        path = Path(path)
+        path.parent.mkdir(parents=True, exist_ok=True)
+        animation.save(path, writer=PillowWriter(fps=frames_per_second))
+        plt.close(fig)
+        return path
+
+    def to_dict(self) -> dict:
+        g = self.scans.geometry
+        scans = []
+        for index, features in enumerate(self.features):
+            beams = features.beams
+            scans.append({
+                "scan": index,
+                "record": int(self.scans.records[index]),
+                "t": float(self.scans.times[index]),
+                "lines": [{"r": s.r, "alpha": s.alpha, "start": s.start.tolist(), "end": s.end.tolist(),
+                           "first_beam": int(beams[s.first]), "last_beam": int(beams[s.last])}
+                          for s in features.segments],
+                "observations": [{"range": o.range, "bearing": o.bearing, "x": o.x, "y": o.y, "kind": o.kind,
+                                  "covariance_xy": o.covariance_xy.tolist(), "beam": o.beam}
+                                 for o in features.observations],
+            })
+        return {"source": self.scans.source, "frame": "lines: sensor frame; observations: robot frame",
+                "beam_geometry": g.to_dict(), "parameters": _finite_or_none(dataclasses.asdict(self.params)),
+                "scans": scans}
+
+    def write_json(self, path) -> Path:
+        path = Path(path)
+        path.parent.mkdir(parents=True, exist_ok=True)
+        path.write_text(json.dumps(self.to_dict(), allow_nan=False) + "\n")
+        return path
+
+
+def _finite_or_none(mapping: dict) -> dict:
+    """Parameters for JSON: an infinite limit (no limit) becomes null."""
+    return {key: _finite_or_none(value) if isinstance(value, dict)
+            else None if isinstance(value, float) and not math.isfinite(value) else value
+            for key, value in mapping.items()}

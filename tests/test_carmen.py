@@ -1,0 +1,72 @@
+import gzip
+
+import numpy as np
+import pytest
+
+from conftest import PROJECT_ROOT, SHARED_DATA
+from mazeslam.config import load_toml
+from mazeslam.filters.corners import CornerExtractor, CornerParams
+from mazeslam.imports.carmen import FRONT_LASER, is_carmen, read_carmen
+from mazeslam.log import LogFormatError
+
+CARMEN = SHARED_DATA / "carmen"
+LOGS = ["aces", "csail", "edmonton", "fhw", "freiburg-079", "freiburg-101", "orebro", "seattle"]
+SAMPLE = """\
+# message formats defined: PARAM SYNC ODOM FLASER
+PARAM robot_front_laser_max 50 nohost 0
+ODOM 0.0 0.0 0.0 0 0 0 10.0 nohost 10.0
+FLASER 5 1.0 2.0 3.0 2.0 1.0 0.5 0.25 0.1 0.0 0.0 0.0 10.5 nohost 10.5
+NEFF 1 2 3
+ODOM 0.1 0.0 0.05 0 0 0 11.0 nohost 11.0
+FLASER 5 1.5 2.5 3.5 2.5 1.5 0.6 0.25 0.2 0.1 0.0 0.05 11.5 nohost 11.5
+"""
+
+
+def test_read_hand_written_log(tmp_path):
+    path = tmp_path / "tiny.log.gz"
+    with gzip.open(path, "wt") as handle:
+        handle.write(SAMPLE)
+    assert is_carmen(path)
+    log = read_carmen(path)
+    np.testing.assert_allclose(log.ranges, [[1, 2, 3, 2, 1], [1.5, 2.5, 3.5, 2.5, 1.5]])
+    np.testing.assert_allclose(log.scan_poses[1], [0.6, 0.25, 0.2])
+    np.testing.assert_allclose(log.scan_odometry[1], [0.1, 0.0, 0.05])
+    np.testing.assert_allclose(log.scan_times, [10.5, 11.5])
+    np.testing.assert_allclose(log.odometry_poses[:, 2], [0.0, 0.05])
+    assert log.max_range == 50.0
+    assert log.ignored["NEFF"] == 1 and log.ignored["#"] == 1
+
+
+def test_front_laser_geometry_spans_the_half_circle_ahead():
+    bearings = FRONT_LASER.bearings(181)
+    assert bearings[0] == pytest.approx(-np.pi / 2) and bearings[-1] == pytest.approx(np.pi / 2)
+
+
+def test_malformed_flaser_names_the_line(tmp_path):
+    path = tmp_path / "bad.log"
+    path.write_text("PARAM a 1 h 0\nFLASER 5 1.0 2.0 x 2.0 1.0 0 0 0 0 0 0 1.0 h 1.0\n")
+    with pytest.raises(LogFormatError, match=r"bad.log:2: bad FLASER line"):
+        read_carmen(path)
+    path.write_text("ODOM 0 0 0 0 0 0 1.0 h 1.0\n")
+    with pytest.raises(LogFormatError, match="no FLASER"):
+        read_carmen(path)
+
+
+@pytest.mark.parametrize("name", LOGS)
+def test_corner_extraction_runs_on_every_scan_of_real_logs(name):
+    path = CARMEN / f"{name}-corrected.log.gz"
+    if not path.exists():
+        pytest.skip(f"CARMEN log not found at {path} (the shared data folder is absent)")
+    log = read_carmen(path)
+    params = load_toml(CornerParams, PROJECT_ROOT / "configs" / "corners" / "carmen.toml")
+    extractor = CornerExtractor(FRONT_LASER, log.n_beams, params)
+    lines = observations = 0
+    for ranges in log.ranges:
+        features = extractor.extract(ranges)
+        lines += len(features.segments)
+        observations += len(features.observations)
+        for o in features.observations:
+            assert np.isfinite([o.x, o.y, o.range, o.bearing]).all()
+            assert np.all(np.linalg.eigvalsh(o.covariance_xy) > 0)
+    assert lines > 2 * len(log.ranges)  # buildings: several walls in every scan on average
+    assert observations > 0.5 * len(log.ranges)
