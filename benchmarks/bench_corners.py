@@ -3,7 +3,8 @@
 Speed: 180-beam scans per second on one core (target 2000), extracting from the scans of a
 simulated run; reported with the ratio to the target. Quality: precision and recall of the fixed
 landmarks within 2 cm of the true corners, over 3 random 6 x 6 mazes, as the laser's range noise
-grows while the extractor keeps its default settings (tuned for 3 mm).
+grows: with the default settings (tuned for 3 mm) and with the noise model and split/merge
+thresholds scaled to the noise.
 Run: ``python benchmarks/bench_corners.py``.
 """
 
@@ -19,7 +20,7 @@ import pandas as pd
 from mazeslam import log, sidecars, simulate
 from mazeslam.envs.simulator import MazeParams, SimulationConfig
 from mazeslam.evaluation.corner_quality import evaluate_log
-from mazeslam.filters.corners import CornerExtractor
+from mazeslam.filters.corners import CornerExtractor, CornerParams
 
 TARGET_SCANS_PER_SECOND = 2000.0
 NOISE_LEVELS = (0.0, 0.003, 0.006, 0.01, 0.02)
@@ -42,7 +43,18 @@ def speed(folder: Path) -> dict:
             "met": 1 / best >= TARGET_SCANS_PER_SECOND}
 
 
+def settings_for_noise(noise: float) -> CornerParams:
+    """The default settings with the noise model and thresholds scaled to a range noise (m)."""
+    base = CornerParams()
+    threshold = max(base.lines.split_threshold, 4 * noise)
+    lines = dataclasses.replace(base.lines, range_noise_std=max(noise, 1e-4), split_threshold=threshold,
+                                merge_threshold=threshold)
+    return dataclasses.replace(base, lines=lines)
+
+
 def quality(folder: Path) -> pd.DataFrame:
+    """Mean precision and recall over the seeds, per noise level, for the default settings and for
+    settings scaled to the noise."""
     rows = []
     for noise in NOISE_LEVELS:
         base = SimulationConfig()
@@ -50,10 +62,12 @@ def quality(folder: Path) -> pd.DataFrame:
                                      laser=dataclasses.replace(base.laser, range_noise_std=noise))
         for seed in SEEDS:
             result = simulate(folder / f"q{noise}-{seed}.log", config=config, seed=seed, progress=False)
-            rows.append({"range_noise_m": noise, "seed": seed, **evaluate_log(result.log_path)})
+            for settings, params in (("default", CornerParams()), ("scaled to noise", settings_for_noise(noise))):
+                rows.append({"range_noise_m": noise, "settings": settings, **evaluate_log(result.log_path, params)})
     table = pd.DataFrame(rows)
-    return table.groupby("range_noise_m")[["precision", "recall", "median_error_m", "detections", "observable"]].agg(
-        {"precision": "mean", "recall": "mean", "median_error_m": "mean", "detections": "sum", "observable": "sum"})
+    return table.groupby(["range_noise_m", "settings"]).agg(
+        precision=("precision", "mean"), recall=("recall", "mean"), median_error_m=("median_error_m", "mean"),
+        detections=("detections", "sum"), observable=("observable", "sum"))
 
 
 if __name__ == "__main__":

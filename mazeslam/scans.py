@@ -27,6 +27,8 @@ class ScanSet:
         times: (S,) seconds; records: (S,) record numbers in the log (the line order of scans).
         ranges: (S, N) metres, 0 = no return.
         geometry: beam geometry of the scans; geometry_origin: where it came from (for messages).
+        true_poses: (S, 3) the true robot pose at each scan, when a truth sidecar exists.
+        true_corners: (K, 2) the world's true corners, when a map sidecar exists.
     """
 
     source: str
@@ -35,6 +37,8 @@ class ScanSet:
     ranges: np.ndarray
     geometry: BeamGeometry
     geometry_origin: str
+    true_poses: np.ndarray | None = None
+    true_corners: np.ndarray | None = None
 
     @property
     def n_beams(self) -> int:
@@ -49,6 +53,7 @@ def load_scans(path: str | Path, geometry_overrides: dict | None = None, strict:
     """
     path = Path(path)
     overrides = {k: v for k, v in (geometry_overrides or {}).items() if v is not None}
+    true_poses = true_corners = None
     if is_carmen(path):
         carmen = read_carmen(path)
         geometry, origin = FRONT_LASER, "CARMEN front laser"
@@ -58,14 +63,18 @@ def load_scans(path: str | Path, geometry_overrides: dict | None = None, strict:
         course_log = log.read(path, strict=strict)
         if course_log.n_beams is None:
             raise ValueError(f"{path}: the log has no scan records")
-        map_file = sidecars.map_path(path)
+        map_file, truth_file = sidecars.map_path(path), sidecars.truth_path(path)
+        records = np.flatnonzero(course_log.is_scan)
         if map_file.exists():
-            geometry, origin = sidecars.beam_geometry(sidecars.read_map(map_file)["sensor"]), f"sidecar {map_file}"
+            world = sidecars.read_map(map_file)
+            geometry, origin = sidecars.beam_geometry(world["sensor"]), f"sidecar {map_file}"
+            true_corners = world["corners"]
         else:
             geometry, origin = EXERCISE_CONVENTION, "assumed: the exercise's convention (no sidecar)"
-        records = np.flatnonzero(course_log.is_scan)
+        if truth_file.exists():
+            true_poses = sidecars.read_truth(truth_file)[1][records]
         times, ranges = course_log.times[records], course_log.values[records]
     if overrides:
         geometry = dataclasses.replace(geometry, **overrides)
         origin = f"{origin}, overridden by {', '.join(sorted(overrides))}"
-    return ScanSet(str(path), times, records, ranges, geometry, origin)
+    return ScanSet(str(path), times, records, ranges, geometry, origin, true_poses, true_corners)

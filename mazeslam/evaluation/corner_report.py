@@ -19,6 +19,7 @@ from tqdm.auto import tqdm  # noqa: E402
 from mazeslam.config import load_toml  # noqa: E402
 from mazeslam.evaluation.corner_plots import draw_scan, plot_scan  # noqa: E402
 from mazeslam.filters.corners import CornerExtractor, CornerParams, ScanFeatures  # noqa: E402
+from mazeslam.geometry import inverse, transform_points  # noqa: E402
 from mazeslam.scans import ScanSet, load_scans  # noqa: E402
 
 
@@ -65,7 +66,13 @@ class CornerReport:
         if index >= len(self.features):
             raise ValueError(f"scan {index} does not exist: the log has {len(self.features)} scans (0..{len(self.features) - 1})")
         mount = (self.scans.geometry.mount_x, self.scans.geometry.mount_y)
-        return plot_scan(path, self.features[index], mount, self._title(index))
+        return plot_scan(path, self.features[index], mount, self._title(index), self._true_corners(index))
+
+    def _true_corners(self, index: int):
+        """The world's true corners in the robot frame at scan ``index``, when the log has truth."""
+        if self.scans.true_poses is None or self.scans.true_corners is None:
+            return None
+        return transform_points(inverse(self.scans.true_poses[index]), self.scans.true_corners)
 
     def animate(self, path, frames_per_second: float = 4.0) -> Path:
         """Every scan in turn, in one GIF, with fixed axes so the view does not jump."""
