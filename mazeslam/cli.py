@@ -36,8 +36,10 @@ def main():
               help="Simulator TOML config (see configs/simulation.toml).")
 @click.option("--commands", "commands_path", type=click.Path(exists=True, dir_okay=False, path_type=Path),
               help="Drive open-loop from a file of 'duration speed turn_rate' lines instead of exploring.")
+@click.option("--plot", "plot_path", type=click.Path(dir_okay=False, path_type=Path),
+              help="Draw the run: walls, true corners, true path and dead reckoning.")
 @click.option("--quiet", is_flag=True, help="No progress bar.")
-def simulate(out, seed, maze, rows, cols, duration, beams, config_path, commands_path, quiet):
+def simulate(out, seed, maze, rows, cols, duration, beams, config_path, commands_path, plot_path, quiet):
     """Drive the simulated e-puck through a maze and write a course log with truth and map sidecars."""
     from mazeslam.envs.policies import load_commands
     from mazeslam.envs.simulator import load_config, simulate as run_simulation
@@ -48,9 +50,22 @@ def simulate(out, seed, maze, rows, cols, duration, beams, config_path, commands
                             progress=not quiet)
     click.echo(f"wrote {result.log_path} ({len(result.times)} records, {result.times[-1]:.1f} s simulated), "
                f"{result.truth_path}, {result.map_path}")
+    if plot_path:
+        click.echo(f"figure: {_plot_simulation(result, plot_path)}")
     if duration is None and not result.policy_finished:
         click.echo(f"warning: the run stopped at max_duration {config.max_duration} s before its policy "
                    f"finished", err=True)
+
+
+def _plot_simulation(result, plot_path: Path) -> Path:
+    from mazeslam import sidecars
+    from mazeslam.evaluation.plots import plot_run
+    from mazeslam.filters.motion import dead_reckoning
+
+    world = sidecars.read_map(result.map_path)
+    estimate = dead_reckoning(log.read(result.log_path), world["start_pose"])
+    return plot_run(plot_path, world["walls"], world["corners"], result.poses, {"dead reckoning": estimate},
+                    title=f"{result.maze.name}: {len(result.times)} records, {result.times[-1]:.0f} s")
 
 
 def _with_overrides(config, rows=None, cols=None, beams=None):
@@ -155,18 +170,36 @@ def corners(log_file, scan_number, plot_path, animation_path, json_path, config_
 
 
 @main.command()
+@click.argument("log_file", type=click.Path(exists=True, dir_okay=False, path_type=Path))
+@click.option("--particles", type=click.IntRange(min=1), help="NPARTICLES [default: from the config, 100].")
+@click.option("--config", "config_path", type=click.Path(exists=True, dir_okay=False, path_type=Path),
+              help="FastSLAM TOML with [fastslam], [corners], [sensor] (see configs/fastslam.toml).")
+@click.option("--out", "out_dir", type=click.Path(file_okay=False, path_type=Path),
+              help="Folder for trajectory.csv, map.json, slam.png [default: beside the log, <name>.slam/].")
+@click.option("--seed", type=int, help="Seed of the filter's random draws [default: from the config, 0].")
+@click.option("--animate", is_flag=True, help="Also write slam.gif (particles and map over time).")
+@beam_geometry_options
+@click.option("--quiet", is_flag=True, help="No progress bar.")
+def slam(log_file, particles, config_path, out_dir, seed, animate, first_beam_angle, beam_direction, mount_x, quiet):
+    """Run FastSLAM on a course log: trajectory, map, the exercise's figure, and errors when truth exists."""
+    from mazeslam.slam_command import run_slam_command
+
+    overrides = _geometry_overrides(first_beam_angle, beam_direction, mount_x)
+    out_dir = out_dir or log_file.with_name(f"{log_file.stem}.slam")
+    lines = run_slam_command(log_file, config_path, out_dir, particles, seed, overrides, animate, not quiet)
+    click.echo("\n".join(lines))
+
+
+@main.command()
 @click.option("--out", "out_dir", type=click.Path(file_okay=False, path_type=Path), default=Path("runs/demo"),
               show_default=True, help="Folder for the log, sidecars, table and figure.")
 @click.option("--seed", type=int, default=0, show_default=True)
 @click.option("--quiet", is_flag=True, help="No progress bar.")
 def demo(out_dir, seed, quiet):
-    """The main job on defaults: simulate a maze run, estimate the path, print the ATE table, plot it."""
+    """The main job on defaults: simulate a maze run, run FastSLAM, print the ATE table, plot it."""
     from mazeslam.demo import run_demo
 
-    table, figure = run_demo(out_dir, seed=seed, progress=not quiet)
-    click.echo("Absolute trajectory error against ground truth [m]:")
-    click.echo(table.to_markdown(floatfmt=".4f"))
-    click.echo(f"figure: {figure}")
+    click.echo("\n".join(run_demo(out_dir, seed=seed, progress=not quiet)))
 
 
 def run():

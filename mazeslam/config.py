@@ -8,6 +8,7 @@ the key, so a typo never silently falls back to a default.
 from __future__ import annotations
 
 import dataclasses
+import math
 import tomllib
 from pathlib import Path
 from typing import Any, TypeVar
@@ -69,6 +70,13 @@ def load_toml(cls: type[T], path: str | Path) -> T:
 def to_mapping(params) -> dict[str, Any]:
     """The dataclass ``params`` as a plain (JSON/TOML-ready) nested dict."""
     return dataclasses.asdict(params)
+
+
+def jsonable(mapping: dict) -> dict:
+    """A parameter mapping ready for strict JSON: infinite limits (no limit) become null."""
+    return {key: jsonable(value) if isinstance(value, dict)
+            else None if isinstance(value, float) and not math.isfinite(value) else value
+            for key, value in mapping.items()}
 
 
 def require(condition: bool, message: str) -> None:

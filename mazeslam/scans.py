@@ -45,6 +45,24 @@ class ScanSet:
         return self.ranges.shape[1]
 
 
+def resolve_geometry(path: str | Path, geometry_overrides: dict | None = None) -> tuple[BeamGeometry, str]:
+    """The beam geometry of a course log, and where it came from: the map sidecar, else the
+    exercise's convention; ``geometry_overrides`` (keys of ``BeamGeometry``) replace parts of it."""
+    map_file = sidecars.map_path(path)
+    if map_file.exists():
+        geometry, origin = sidecars.beam_geometry(sidecars.read_map(map_file)["sensor"]), f"sidecar {map_file}"
+    else:
+        geometry, origin = EXERCISE_CONVENTION, "assumed: the exercise's convention (no sidecar)"
+    return _override(geometry, origin, geometry_overrides)
+
+
+def _override(geometry: BeamGeometry, origin: str, overrides: dict | None) -> tuple[BeamGeometry, str]:
+    overrides = {k: v for k, v in (overrides or {}).items() if v is not None}
+    if not overrides:
+        return geometry, origin
+    return dataclasses.replace(geometry, **overrides), f"{origin}, overridden by {', '.join(sorted(overrides))}"
+
+
 def load_scans(path: str | Path, geometry_overrides: dict | None = None, strict: bool = True) -> ScanSet:
     """The scans of a course log or a CARMEN log (plain or gzipped).
 
@@ -52,7 +70,6 @@ def load_scans(path: str | Path, geometry_overrides: dict | None = None, strict:
     ``mount_x``, ...) replace what the sidecar or the format says.
     """
     path = Path(path)
-    overrides = {k: v for k, v in (geometry_overrides or {}).items() if v is not None}
     true_poses = true_corners = None
     if is_carmen(path):
         carmen = read_carmen(path)
@@ -65,16 +82,11 @@ def load_scans(path: str | Path, geometry_overrides: dict | None = None, strict:
             raise ValueError(f"{path}: the log has no scan records")
         map_file, truth_file = sidecars.map_path(path), sidecars.truth_path(path)
         records = np.flatnonzero(course_log.is_scan)
+        geometry, origin = resolve_geometry(path)
         if map_file.exists():
-            world = sidecars.read_map(map_file)
-            geometry, origin = sidecars.beam_geometry(world["sensor"]), f"sidecar {map_file}"
-            true_corners = world["corners"]
-        else:
-            geometry, origin = EXERCISE_CONVENTION, "assumed: the exercise's convention (no sidecar)"
+            true_corners = sidecars.read_map(map_file)["corners"]
         if truth_file.exists():
             true_poses = sidecars.read_truth(truth_file)[1][records]
         times, ranges = course_log.times[records], course_log.values[records]
-    if overrides:
-        geometry = dataclasses.replace(geometry, **overrides)
-        origin = f"{origin}, overridden by {', '.join(sorted(overrides))}"
+    geometry, origin = _override(geometry, origin, geometry_overrides)
     return ScanSet(str(path), times, records, ranges, geometry, origin, true_poses, true_corners)

@@ -55,15 +55,23 @@ def test_simulate_rejects_impossible_parameters(tmp_path):
     assert "--beams" in result.output
 
 
-def test_demo_prints_ate_table_and_writes_plot(tmp_path):
+def test_demo_simulates_maps_prints_ate_table_and_writes_plot(tmp_path):
     result = invoke("demo", "--out", tmp_path / "demo", "--quiet")
     assert result.exit_code == 0, result.output
-    assert "| dead reckoning |" in result.output
-    assert (tmp_path / "demo" / "run.png").stat().st_size > 10_000
-    assert (tmp_path / "demo" / "ate.csv").exists()
+    assert "| dead reckoning " in result.output and "| FastSLAM (mean) " in result.output
+    assert (tmp_path / "demo" / "slam" / "slam.png").stat().st_size > 10_000
+    trajectory = (tmp_path / "demo" / "slam" / "trajectory.csv").read_text().splitlines()
+    assert trajectory[0] == "t,x,y,theta"
+    assert len(trajectory) - 1 == len(log.read(tmp_path / "demo" / "run.log"))
 
 
-@pytest.mark.parametrize("command", ["simulate", "info", "demo", "corners"])
+def test_simulate_plot(tmp_path):
+    result = invoke("simulate", "--out", tmp_path / "r.log", "--duration", 10, "--plot", tmp_path / "r.png", "--quiet")
+    assert result.exit_code == 0, result.output
+    assert (tmp_path / "r.png").stat().st_size > 10_000
+
+
+@pytest.mark.parametrize("command", ["simulate", "info", "demo", "corners", "slam"])
 def test_help(command):
     assert invoke(command, "--help").exit_code == 0
 

@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import dataclasses
 import json
-import math
 from collections import Counter
 from dataclasses import dataclass
 from pathlib import Path
@@ -16,7 +15,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 from matplotlib.animation import FuncAnimation, PillowWriter  # noqa: E402
 from tqdm.auto import tqdm  # noqa: E402
 
-from mazeslam.config import load_toml  # noqa: E402
+from mazeslam.config import jsonable, load_toml  # noqa: E402
 from mazeslam.evaluation.corner_plots import draw_scan, plot_scan  # noqa: E402
 from mazeslam.filters.corners import CornerExtractor, CornerParams, ScanFeatures  # noqa: E402
 from mazeslam.geometry import inverse, transform_points  # noqa: E402
@@ -111,7 +110,7 @@ class CornerReport:
                                  for o in features.observations],
             })
         return {"source": self.scans.source, "frame": "lines: sensor frame; observations: robot frame",
-                "beam_geometry": g.to_dict(), "parameters": _finite_or_none(dataclasses.asdict(self.params)),
+                "beam_geometry": g.to_dict(), "parameters": jsonable(dataclasses.asdict(self.params)),
                 "scans": scans}
 
     def write_json(self, path) -> Path:
@@ -120,9 +119,3 @@ class CornerReport:
         path.write_text(json.dumps(self.to_dict(), allow_nan=False) + "\n")
         return path
 
-
-def _finite_or_none(mapping: dict) -> dict:
-    """Parameters for JSON: an infinite limit (no limit) becomes null."""
-    return {key: _finite_or_none(value) if isinstance(value, dict)
-            else None if isinstance(value, float) and not math.isfinite(value) else value
-            for key, value in mapping.items()}

@@ -1,4 +1,4 @@
-"""Figures of a run: the maze's walls and corners, the true path and estimated paths."""
+"""Figure of a simulated run: the maze's walls and corners, the true path and estimated paths."""
 
 from __future__ import annotations
 
@@ -10,12 +10,10 @@ matplotlib.use("Agg")  # draw to files; no display needed
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
-from mazeslam.geometry import polar_to_cartesian, transform_points  # noqa: E402
 
 
 def plot_run(path: str | Path, walls: np.ndarray, corners: np.ndarray, truth: np.ndarray,
-             estimates: dict[str, np.ndarray], scan: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None,
-             title: str = "") -> Path:
+             estimates: dict[str, np.ndarray], title: str = "") -> Path:
     """Save a top-down figure of a run to ``path`` (PNG, PDF, ... by suffix).
 
     Args:
@@ -23,8 +21,6 @@ def plot_run(path: str | Path, walls: np.ndarray, corners: np.ndarray, truth: np
         corners: (K, 2) true corners.
         truth: (R, 3) true poses.
         estimates: name -> (R, 3) estimated poses, e.g. ``{"dead reckoning": ...}``.
-        scan: optional ``(sensor_pose (3,), ranges (N,), bearings (N,))`` drawn as points; ranges
-            of 0 (no return) are left out.
     """
     fig, ax = plt.subplots(figsize=(9, 7))
     for x1, y1, x2, y2 in walls:
@@ -34,11 +30,6 @@ def plot_run(path: str | Path, walls: np.ndarray, corners: np.ndarray, truth: np
     ax.plot(truth[:, 0], truth[:, 1], color="black", linewidth=1.2, label="true path")
     for (name, poses), colour in zip(estimates.items(), ("tab:red", "tab:blue", "tab:orange", "tab:purple")):
         ax.plot(poses[:, 0], poses[:, 1], "--", color=colour, linewidth=1.0, label=name)
-    if scan is not None:
-        sensor_pose, ranges, bearings = scan
-        valid = ranges > 0
-        points = transform_points(sensor_pose, polar_to_cartesian(ranges[valid], bearings[valid]))
-        ax.plot(points[:, 0], points[:, 1], ".", color="tab:gray", markersize=2, label="one scan")
     ax.plot(*truth[0, :2], "k^", markersize=8, label="start")
     ax.set_aspect("equal")
     ax.set_xlabel("x [m]")

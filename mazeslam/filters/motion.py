@@ -1,7 +1,16 @@
-"""Motion from odometry: the deterministic part of the exercise's ``predict_odo``.
+"""Motion from odometry: the exercise's ``predict_odo``, and dead reckoning.
 
-The noisy prediction that diffuses particles (FastSLAM) builds on ``advance_pose``; here lives
-dead reckoning, the baseline every SLAM estimate is compared with.
+The odometry reports, per record, the distance travelled ``dr`` and the heading change ``dth``
+(the exercise's dX, dTheta). Every particle moves by the same increment with its own noise, drawn
+in the increment's own terms (distance and turn), then composed with ``advance_pose``:
+
+    dr'  = dr  + N(0, sigmaX^2 |dr|)
+    dth' = dth + N(0, sigmaTH^2 |dth| + sigmaTH_drive^2 |dr|)
+
+The variances grow with the motion, like wheel slip does (a random walk: after travelling d the
+error has standard deviation proportional to sqrt(d)). The exercise adds a fixed amount per
+record instead, so its cloud spreads even while the robot stands still; here a record that
+reports no motion moves no particle.
 """
 
 from __future__ import annotations
@@ -10,6 +19,27 @@ import numpy as np
 
 from mazeslam.geometry import advance_pose
 from mazeslam.log import CourseLog
+
+
+def predict_odometry(poses: np.ndarray, distance: float, turn: float, sigma_x: float, sigma_th: float,
+                     sigma_th_drive: float, rng: np.random.Generator) -> np.ndarray:
+    """Particles ``poses`` (P, 3) moved by one odometry increment with motion-proportional noise.
+
+    Args:
+        distance, turn: the increment, metres and radians.
+        sigma_x: distance noise, m per sqrt(m) travelled.
+        sigma_th: heading noise from turning, rad per sqrt(rad) turned.
+        sigma_th_drive: heading noise from driving, rad per sqrt(m) travelled.
+        rng: the source of the noise (2 P normal draws per moving increment).
+    Returns the new poses (P, 3), world frame.
+    """
+    if distance == 0.0 and turn == 0.0:
+        return poses
+    count = len(poses)
+    distance_std = sigma_x * np.sqrt(abs(distance))
+    turn_std = np.sqrt(sigma_th**2 * abs(turn) + sigma_th_drive**2 * abs(distance))
+    noise = rng.standard_normal((2, count))
+    return advance_pose(poses, distance + distance_std * noise[0], turn + turn_std * noise[1])
 
 
 def dead_reckoning(log: CourseLog, start_pose=(0.0, 0.0, 0.0)) -> np.ndarray:

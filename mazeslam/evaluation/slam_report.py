@@ -1,0 +1,150 @@
+"""What ``mazeslam slam`` writes and prints: trajectory, map, figure, animation, error tables."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+import pandas as pd  # noqa: E402
+from matplotlib.animation import FuncAnimation, PillowWriter  # noqa: E402
+from matplotlib.patches import Ellipse  # noqa: E402
+
+from mazeslam import log, sidecars  # noqa: E402
+from mazeslam.beams import BeamGeometry  # noqa: E402
+from mazeslam.evaluation.metrics import absolute_trajectory_error, map_error  # noqa: E402
+from mazeslam.filters.motion import dead_reckoning  # noqa: E402
+from mazeslam.geometry import compose, polar_to_cartesian, transform_points  # noqa: E402
+from mazeslam.slam import SlamResult  # noqa: E402
+
+
+def error_table(estimates: dict[str, np.ndarray], truth: np.ndarray) -> pd.DataFrame:
+    """ATE (RMSE, mean, max; without and with SE(2) alignment) of each named trajectory, metres."""
+    rows = []
+    for name, poses in estimates.items():
+        raw = absolute_trajectory_error(poses, truth)
+        aligned = absolute_trajectory_error(poses, truth, align=True)
+        rows.append({"estimator": name, "ate_rmse": raw["rmse"], "ate_mean": raw["mean"], "ate_max": raw["max"],
+                     "aligned_rmse": aligned["rmse"], "aligned_mean": aligned["mean"], "aligned_max": aligned["max"]})
+    return pd.DataFrame(rows).set_index("estimator")
+
+
+def evaluate_against_truth(path, course_log: log.CourseLog, result: SlamResult, start) -> tuple[pd.DataFrame, dict] | None:
+    """The ATE table (dead reckoning and FastSLAM) and the map error, when the log has truth sidecars."""
+    truth_file, map_file = sidecars.truth_path(path), sidecars.map_path(path)
+    if not truth_file.exists():
+        return None
+    _, truth = sidecars.read_truth(truth_file)
+    estimates = {"dead reckoning": dead_reckoning(course_log, start), "FastSLAM (mean)": result.mean_poses,
+                 "FastSLAM (best particle)": result.best_poses}
+    corners = sidecars.read_map(map_file)["corners"] if map_file.exists() else np.empty((0, 2))
+    return error_table(estimates, truth), map_error(result.landmarks, corners)
+
+
+def scan_points_world(course_log: log.CourseLog, poses: np.ndarray, geometry: BeamGeometry) -> np.ndarray:
+    """Every scan's returns (Q, 2) placed in the world by the given poses (R, 3) of the records."""
+    bearings = geometry.bearings(course_log.width)
+    chunks = []
+    for index in np.flatnonzero(course_log.is_scan):
+        ranges = course_log.values[index]
+        valid = ranges > 0
+        sensor = compose(poses[index], [geometry.mount_x, geometry.mount_y, 0.0])
+        chunks.append(transform_points(sensor, polar_to_cartesian(ranges[valid], bearings[valid])))
+    return np.concatenate(chunks) if chunks else np.empty((0, 2))
+
+
+def plot_slam(path, result: SlamResult, points: np.ndarray, truth: np.ndarray | None = None,
+              walls: np.ndarray | None = None, title: str = "") -> Path:
+    """The exercise's figure: best particle's map with 2-sigma ellipses, particles in red, scan
+    points in black, the estimated path; with truth, the true path and walls too."""
+    fig, ax = plt.subplots(figsize=(9, 7))
+    if walls is not None:
+        for x1, y1, x2, y2 in walls:
+            ax.plot([x1, x2], [y1, y2], color="0.6", linewidth=1.0)
+    ax.plot(points[:, 0], points[:, 1], ".", color="black", markersize=0.8, alpha=0.4, label="scan points")
+    if truth is not None:
+        ax.plot(truth[:, 0], truth[:, 1], color="tab:green", linewidth=1.2, label="true path")
+    ax.plot(result.mean_poses[:, 0], result.mean_poses[:, 1], color="tab:blue", linewidth=1.2, label="FastSLAM path")
+    particles = result.filter.poses
+    ax.plot(particles[:, 0], particles[:, 1], ".", color="red", markersize=3, label="particles")
+    for mean, covariance in zip(result.landmarks, result.landmark_covariances):
+        ax.add_patch(_ellipse(mean, covariance))
+    if len(result.landmarks):
+        ax.plot(result.landmarks[:, 0], result.landmarks[:, 1], "+", color="tab:purple", markersize=8,
+                label="landmarks (2 sigma)")
+    ax.set_aspect("equal")
+    ax.set_xlabel("x [m]")
+    ax.set_ylabel("y [m]")
+    ax.set_title(title)
+    ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=8)
+    fig.tight_layout()
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+    return path
+
+
+def _ellipse(mean, covariance, sigmas: float = 2.0) -> Ellipse:
+    values, vectors = np.linalg.eigh(covariance)
+    angle = np.degrees(np.arctan2(vectors[1, 1], vectors[0, 1]))
+    width, height = 2 * sigmas * np.sqrt(np.maximum(values[::-1], 0))
+    return Ellipse(mean, width, height, angle=angle, fill=False, color="tab:purple", linewidth=0.8)
+
+
+def animate_slam(path, result: SlamResult, points: np.ndarray, truth: np.ndarray | None = None,
+                 walls: np.ndarray | None = None, frames_per_second: float = 5.0) -> Path:
+    """A GIF of the run: particles (red), map so far (purple), path so far, one frame per snapshot."""
+    fig, ax = plt.subplots(figsize=(6, 6))
+    low, high = points.min(axis=0) - 0.05, points.max(axis=0) + 0.05
+
+    def draw(frame):
+        index, particles, landmarks = result.snapshots[frame]
+        ax.clear()
+        if walls is not None:
+            for x1, y1, x2, y2 in walls:
+                ax.plot([x1, x2], [y1, y2], color="0.75", linewidth=1.0)
+        if truth is not None:
+            ax.plot(truth[: index + 1, 0], truth[: index + 1, 1], color="tab:green", linewidth=1.0)
+        ax.plot(result.mean_poses[: index + 1, 0], result.mean_poses[: index + 1, 1], color="tab:blue", linewidth=1.0)
+        ax.plot(particles[:, 0], particles[:, 1], ".", color="red", markersize=2)
+        if len(landmarks):
+            ax.plot(landmarks[:, 0], landmarks[:, 1], "+", color="tab:purple", markersize=7)
+        ax.set_xlim(low[0], high[0])
+        ax.set_ylim(low[1], high[1])
+        ax.set_aspect("equal")
+        ax.set_title(f"record {index}, t = {result.times[index]:.1f} s", fontsize=9)
+
+    animation = FuncAnimation(fig, draw, frames=len(result.snapshots))
+    path = Path(path)
+    animation.save(path, writer=PillowWriter(fps=frames_per_second))
+    plt.close(fig)
+    return path
+
+
+def write_outputs(out_dir, result: SlamResult, extra: dict) -> dict[str, Path]:
+    """``trajectory.csv`` (t,x,y,theta: weighted mean at every record), ``best_trajectory.csv``
+    (most probable particle) and ``map.json`` (best particle's landmarks with covariances, run facts)."""
+    out_dir = Path(out_dir)
+    out_dir.mkdir(parents=True, exist_ok=True)
+    paths = {"trajectory": out_dir / "trajectory.csv", "best_trajectory": out_dir / "best_trajectory.csv",
+             "map": out_dir / "map.json"}
+    sidecars.write_truth(paths["trajectory"], result.times, result.mean_poses)
+    sidecars.write_truth(paths["best_trajectory"], result.times, result.best_poses)
+    scan_seconds = np.array([s for s in result.step_seconds])
+    document = {
+        "frame": "world; metres",
+        "landmarks": result.landmarks.round(6).tolist(),
+        "landmark_covariances": result.landmark_covariances.tolist(),
+        "resamplings": result.resamplings,
+        "scans": len(result.reports),
+        "seconds_total": float(scan_seconds.sum()),
+        "seconds_per_record_mean": float(scan_seconds.mean()),
+        **extra,
+    }
+    paths["map"].write_text(json.dumps(document, indent=1) + "\n")
+    return paths

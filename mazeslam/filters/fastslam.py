@@ -1,0 +1,327 @@
+"""FastSLAM 1.0 (Montemerlo et al. 2002): a particle filter over robot paths, an EKF per landmark.
+
+Each particle is one hypothesis of the robot pose and carries its own map: landmark means and 2x2
+covariances (the Rao-Blackwellised factorisation in the exercise's overview). Everything is held
+in arrays shaped by particles P and landmark slots M and updated with broadcasting; the only Python
+loops run over the few observations of a scan.
+
+State (all world frame, metres and radians):
+    poses        (P, 3)        x, y, theta of every particle
+    log_weights  (P,)          normalised so that logsumexp = 0
+    means        (P, M, 2)     landmark positions
+    covariances  (P, M, 2, 2)  landmark covariances
+    exists       (P, M)        slot holds a landmark
+    seen         (P, M)        times the landmark was observed
+    missed       (P, M)        scans it was predicted in view but not observed (tentative ones only)
+    ids          (P, M)        known identity of the landmark (-1: unknown)
+
+Observations are range and bearing ``z = (rho, phi)`` of a point landmark in the robot frame; the
+measurement model is ``h(x, m) = (|m - x|, atan2(m_y - y, m_x - x) - theta)``.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from mazeslam.config import require
+from mazeslam.filters.motion import predict_odometry
+from mazeslam.geometry import wrap_angle
+
+LOG_TWO_PI = math.log(2 * math.pi)
+
+
+@dataclass(frozen=True)
+class FastSLAMParams:
+    """Filter settings, named as in the exercise's control_panel.m where it has them.
+
+    Attributes:
+        NPARTICLES: number of particles.
+        sigmaX: odometry distance noise, m per sqrt(m) travelled.
+        sigmaTH: odometry heading noise from turning, rad per sqrt(rad) turned.
+        sigmaTH_drive: odometry heading noise from driving, rad per sqrt(m) travelled.
+        sigmaR, sigmaB: range (m) and bearing (rad) noise of an observation; with
+            ``use_observation_covariance`` added to the covariance the corner extractor reports.
+        use_observation_covariance: use each observation's own covariance (from the line fits).
+        gate: Mahalanobis gate (squared) for associating an observation with a landmark
+            (9.21: 99 % of a 2-D Gaussian).
+        new_landmark_gate: an unassociated observation farther (squared Mahalanobis) than this
+            from every landmark starts a new landmark; nearer ones are ambiguous and left out
+            (counted in the diagnostics).
+        resample_threshold: resample when the effective sample size falls below this fraction of
+            NPARTICLES.
+        association: "unknown" (maximum likelihood with the gate) or "known" (identities given).
+        view_range: metres; a landmark this near is predicted to be observed.
+        tentative_limit: a landmark seen only once is removed after this many scans in which it
+            was predicted (within ``view_range``) but not observed.
+        seed: seeds the filter's random draws.
+    """
+
+    NPARTICLES: int = 100
+    sigmaX: float = 0.005
+    sigmaTH: float = 0.03
+    sigmaTH_drive: float = 0.12
+    sigmaR: float = 0.003
+    sigmaB: float = math.radians(1.0)
+    use_observation_covariance: bool = True
+    gate: float = 9.21
+    new_landmark_gate: float = 16.0
+    resample_threshold: float = 0.5
+    association: str = "unknown"
+    view_range: float = 0.25
+    tentative_limit: int = 3
+    seed: int = 0
+
+    def __post_init__(self):
+        require(self.NPARTICLES >= 1, f"NPARTICLES must be at least 1, got {self.NPARTICLES}")
+        for name in ("sigmaX", "sigmaTH", "sigmaTH_drive", "sigmaR", "sigmaB"):
+            require(getattr(self, name) >= 0, f"{name} must be >= 0, got {getattr(self, name)}")
+        require(self.sigmaR > 0 or self.use_observation_covariance,
+                "sigmaR must be positive unless use_observation_covariance is on")
+        require(0 < self.gate <= self.new_landmark_gate,
+                f"need 0 < gate <= new_landmark_gate, got {self.gate} and {self.new_landmark_gate}")
+        require(0 <= self.resample_threshold <= 1, f"resample_threshold must be in [0, 1], got {self.resample_threshold}")
+        require(self.association in ("unknown", "known"), f"association must be 'unknown' or 'known', got {self.association!r}")
+        require(self.view_range >= 0 and self.tentative_limit >= 1, "view_range must be >= 0 and tentative_limit >= 1")
+
+
+@dataclass
+class UpdateReport:
+    """What one scan's update did, summed over particles (diagnostics)."""
+
+    observations: int = 0
+    matched: int = 0
+    new: int = 0
+    ambiguous: int = 0
+    removed: int = 0
+    resampled: bool = False
+    effective_sample_size: float = 0.0
+
+
+class FastSLAM:
+    """The filter. ``predict`` with each odometry record, ``update`` with each scan's observations."""
+
+    def __init__(self, params: FastSLAMParams, start_pose=(0.0, 0.0, 0.0), capacity: int = 32):
+        self.params = params
+        self.rng = np.random.default_rng(params.seed)
+        p = params.NPARTICLES
+        self.poses = np.tile(np.asarray(start_pose, dtype=float), (p, 1))
+        self.log_weights = np.full(p, -math.log(p))
+        self.means = np.zeros((p, capacity, 2))
+        self.covariances = np.tile(np.eye(2), (p, capacity, 1, 1))
+        self.exists = np.zeros((p, capacity), dtype=bool)
+        self.seen = np.zeros((p, capacity), dtype=np.int32)
+        self.missed = np.zeros((p, capacity), dtype=np.int32)
+        self.ids = np.full((p, capacity), -1, dtype=np.int64)
+        self.resamplings = 0
+
+    # -- motion -----------------------------------------------------------------------------
+    def predict(self, distance: float, turn: float) -> None:
+        """Move every particle by an odometry increment (metres, radians) with its own noise."""
+        p = self.params
+        self.poses = predict_odometry(self.poses, distance, turn, p.sigmaX, p.sigmaTH, p.sigmaTH_drive, self.rng)
+
+    # -- observation model --------------------------------------------------------------------
+    def _predicted(self):
+        """Predicted range/bearing (P, M, 2) of every landmark slot and the Jacobian H (P, M, 2, 2)."""
+        delta = self.means - self.poses[:, None, :2]
+        q = np.maximum(np.einsum("pmi,pmi->pm", delta, delta), 1e-12)
+        rho = np.sqrt(q)
+        bearing = wrap_angle(np.arctan2(delta[..., 1], delta[..., 0]) - self.poses[:, None, 2])
+        dx, dy = delta[..., 0], delta[..., 1]
+        jacobian = np.stack([np.stack([dx / rho, dy / rho], -1), np.stack([-dy / q, dx / q], -1)], -2)
+        return np.stack([rho, bearing], -1), jacobian
+
+    def _noise(self, covariances: np.ndarray | None, count: int) -> np.ndarray:
+        """Observation noise R (K, 2, 2): the fixed sigmaR/sigmaB plus each observation's own."""
+        fixed = np.diag([self.params.sigmaR**2, self.params.sigmaB**2])
+        if covariances is None or not self.params.use_observation_covariance:
+            return np.broadcast_to(fixed, (count, 2, 2)).copy()
+        return np.asarray(covariances, dtype=float) + fixed
+
+    # -- update -------------------------------------------------------------------------------
+    def update(self, observations: np.ndarray, covariances: np.ndarray | None = None,
+               ids: np.ndarray | None = None) -> UpdateReport:
+        """Weigh and correct every particle with one scan's observations.
+
+        Args:
+            observations: (K, 2) range (m) and bearing (rad) in the robot frame.
+            covariances: (K, 2, 2) their covariances, or None.
+            ids: (K,) known landmark identities (``association="known"``), else None.
+        """
+        observations = np.asarray(observations, dtype=float).reshape(-1, 2)
+        report = UpdateReport(observations=len(observations))
+        count = len(observations)
+        if count:
+            while (~self.exists).sum(axis=1).min() < count:  # room for every observation to start a landmark
+                self._grow()
+            noise = self._noise(covariances, count)
+            predicted, jacobian = self._predicted()
+            base = jacobian @ self.covariances @ np.swapaxes(jacobian, -1, -2)  # (P, M, 2, 2)
+            innovation = observations[None, :, None, :] - predicted[:, None]  # (P, K, M, 2)
+            innovation[..., 1] = wrap_angle(innovation[..., 1])
+            s = base[:, None] + noise[None, :, None]  # (P, K, M, 2, 2)
+            s_inv, s_det = _inverse_2x2(s)
+            distance2 = np.einsum("pkmi,pkmij,pkmj->pkm", innovation, s_inv, innovation)
+            distance2[~np.broadcast_to(self.exists[:, None, :], distance2.shape)] = np.inf
+            if self.params.association == "known":
+                if ids is None:
+                    raise ValueError("association='known' needs the observations' ids")
+                assigned = self._associate_known(np.asarray(ids))
+            else:
+                assigned = self._associate(distance2)
+            matched_now = np.zeros_like(self.exists)
+            for k in range(count):
+                self._apply(k, assigned[:, k], innovation, s_inv, s_det, distance2, jacobian, observations[k],
+                            noise[k], ids, matched_now, report)
+            self._manage_landmarks(matched_now, report)
+        report.effective_sample_size = self.effective_sample_size()
+        if report.effective_sample_size < self.params.resample_threshold * self.params.NPARTICLES:
+            self.resample()
+            report.resampled = True
+        return report
+
+    def _associate(self, distance2: np.ndarray) -> np.ndarray:
+        """Greedy one-to-one maximum-likelihood association per particle: (P, K) landmark slot or -1.
+
+        Repeatedly takes the closest (Mahalanobis) observation-landmark pair within the gate, so two
+        observations never update one landmark, and the second is not silently lost: it competes
+        for the next closest landmark or becomes new/ambiguous.
+        """
+        p, k, m = distance2.shape
+        remaining = distance2.copy()
+        assigned = np.full((p, k), -1)
+        rows = np.arange(p)
+        for _ in range(min(k, m)):
+            flat = remaining.reshape(p, -1).argmin(axis=1)
+            obs, slot = np.divmod(flat, m)
+            ok = remaining[rows, obs, slot] < self.params.gate
+            if not ok.any():
+                break
+            assigned[rows[ok], obs[ok]] = slot[ok]
+            remaining[rows[ok], obs[ok], :] = np.inf
+            remaining[rows[ok], :, slot[ok]] = np.inf
+        return assigned
+
+    def _associate_known(self, ids: np.ndarray) -> np.ndarray:
+        """(P, K) the slot holding each observation's identity, or -1."""
+        match = (self.ids[:, None, :] == ids[None, :, None]) & self.exists[:, None, :] & (ids[None, :, None] >= 0)
+        return np.where(match.any(axis=2), match.argmax(axis=2), -1)
+
+    def _apply(self, k, slots, innovation, s_inv, s_det, distance2, jacobian, observation, noise, ids, matched_now,
+               report) -> None:
+        """EKF-update the landmarks matched by observation k, start new ones, and weigh the particles."""
+        rows = np.flatnonzero(slots >= 0)
+        if len(rows):
+            j = slots[rows]
+            h = jacobian[rows, j]  # (n, 2, 2)
+            sigma = self.covariances[rows, j]
+            gain = sigma @ np.swapaxes(h, -1, -2) @ s_inv[rows, k, j]  # (n, 2, 2)
+            nu = innovation[rows, k, j]
+            self.means[rows, j] += np.einsum("nij,nj->ni", gain, nu)
+            identity_minus = np.eye(2) - gain @ h
+            # Joseph form keeps the covariance symmetric and positive definite.
+            self.covariances[rows, j] = (identity_minus @ sigma @ np.swapaxes(identity_minus, -1, -2)
+                                         + gain @ noise @ np.swapaxes(gain, -1, -2))
+            self.log_weights[rows] += -0.5 * distance2[rows, k, j] - LOG_TWO_PI - 0.5 * np.log(s_det[rows, k, j])
+            self.seen[rows, j] += 1
+            self.missed[rows, j] = 0
+            matched_now[rows, j] = True
+            report.matched += len(rows)
+        unmatched = slots < 0
+        nearest = distance2[:, k].min(axis=1, initial=np.inf)
+        new = unmatched & ((nearest >= self.params.new_landmark_gate) | (self.params.association == "known"))
+        report.ambiguous += int((unmatched & ~new).sum())
+        if new.any():
+            self._add_landmarks(np.flatnonzero(new), observation, noise, None if ids is None else ids[k], matched_now)
+            # A new landmark's likelihood: the density at the edge of the new-landmark gate.
+            self.log_weights[new] += -0.5 * self.params.new_landmark_gate - LOG_TWO_PI - 0.5 * math.log(
+                np.linalg.det(noise))
+            report.new += int(new.sum())
+
+    def _add_landmarks(self, rows: np.ndarray, observation, noise, identity, matched_now) -> None:
+        """Initialise a landmark from one observation in each particle of ``rows``."""
+        slots = (~self.exists[rows]).argmax(axis=1)  # the first free slot (update made room)
+        rho, bearing = observation
+        angle = self.poses[rows, 2] + bearing
+        cos_a, sin_a = np.cos(angle), np.sin(angle)
+        self.means[rows, slots] = self.poses[rows, :2] + rho * np.column_stack([cos_a, sin_a])
+        # Inverse measurement Jacobian dm/d(rho, bearing), then Sigma = G R G^T.
+        g = np.stack([np.stack([cos_a, -rho * sin_a], -1), np.stack([sin_a, rho * cos_a], -1)], -2)
+        self.covariances[rows, slots] = g @ noise @ np.swapaxes(g, -1, -2)
+        self.exists[rows, slots] = True
+        self.seen[rows, slots] = 1
+        self.missed[rows, slots] = 0
+        self.ids[rows, slots] = -1 if identity is None else identity
+        matched_now[rows, slots] = True
+
+    def _grow(self) -> None:
+        """Double the landmark slots of every particle."""
+        p, m = self.exists.shape
+        self.means = np.concatenate([self.means, np.zeros((p, m, 2))], axis=1)
+        self.covariances = np.concatenate([self.covariances, np.tile(np.eye(2), (p, m, 1, 1))], axis=1)
+        self.exists = np.concatenate([self.exists, np.zeros((p, m), dtype=bool)], axis=1)
+        self.seen = np.concatenate([self.seen, np.zeros((p, m), dtype=np.int32)], axis=1)
+        self.missed = np.concatenate([self.missed, np.zeros((p, m), dtype=np.int32)], axis=1)
+        self.ids = np.concatenate([self.ids, np.full((p, m), -1, dtype=np.int64)], axis=1)
+
+    def _manage_landmarks(self, matched_now: np.ndarray, report: UpdateReport) -> None:
+        """Count misses of tentative landmarks predicted in view, and remove repeatedly missed ones."""
+        distance = np.linalg.norm(self.means - self.poses[:, None, :2], axis=-1)
+        in_view = self.exists & (self.seen <= 1) & ~matched_now & (distance < self.params.view_range)
+        self.missed[in_view] += 1
+        remove = self.exists & (self.missed >= self.params.tentative_limit)
+        report.removed += int(remove.sum())
+        self.exists[remove] = False
+
+    # -- weights ------------------------------------------------------------------------------
+    def weights(self) -> np.ndarray:
+        """Normalised particle weights (P,), computed in log space: never NaN, even if every
+        likelihood underflows."""
+        shifted = self.log_weights - self.log_weights.max()
+        weights = np.exp(shifted)
+        return weights / weights.sum()
+
+    def effective_sample_size(self) -> float:
+        weights = self.weights()
+        return float(1.0 / np.sum(weights**2))
+
+    def resample(self) -> None:
+        """Low-variance (systematic) resampling; weights become uniform."""
+        p = self.params.NPARTICLES
+        positions = (self.rng.random() + np.arange(p)) / p
+        cumulative = np.cumsum(self.weights())
+        cumulative[-1] = 1.0
+        index = np.searchsorted(cumulative, positions)
+        for name in ("poses", "means", "covariances", "exists", "seen", "missed", "ids"):
+            setattr(self, name, getattr(self, name)[index])
+        self.log_weights = np.full(p, -math.log(p))
+        self.resamplings += 1
+
+    # -- estimates ----------------------------------------------------------------------------
+    def mean_pose(self) -> np.ndarray:
+        """Weighted mean pose (3,); the heading is the circular mean."""
+        w = self.weights()
+        x, y = w @ self.poses[:, 0], w @ self.poses[:, 1]
+        theta = math.atan2(w @ np.sin(self.poses[:, 2]), w @ np.cos(self.poses[:, 2]))
+        return np.array([x, y, theta])
+
+    def best_particle(self) -> int:
+        return int(np.argmax(self.log_weights))
+
+    def landmarks(self, particle: int | None = None) -> tuple[np.ndarray, np.ndarray]:
+        """Landmark means (L, 2) and covariances (L, 2, 2) of one particle (default: the best)."""
+        particle = self.best_particle() if particle is None else particle
+        keep = self.exists[particle]
+        return self.means[particle, keep], self.covariances[particle, keep]
+
+
+def _inverse_2x2(matrices: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Inverses and determinants of a stack of 2x2 matrices (..., 2, 2)."""
+    a, b = matrices[..., 0, 0], matrices[..., 0, 1]
+    c, d = matrices[..., 1, 0], matrices[..., 1, 1]
+    det = a * d - b * c
+    inverse = np.stack([np.stack([d, -b], -1), np.stack([-c, a], -1)], -2) / det[..., None, None]
+    return inverse, det

@@ -1,0 +1,126 @@
+"""Run FastSLAM over a whole log: odometry records predict, scan records extract corners and update.
+
+This is the exercise's main loop (fastslam1_sim.m): for every line of the log, an odometry entry
+moves the particles, a laser entry is turned into corner observations that weigh and correct them.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+from tqdm.auto import tqdm
+
+from mazeslam import log, sidecars
+from mazeslam.beams import EXERCISE_CONVENTION, BeamGeometry
+from mazeslam.config import load_toml
+from mazeslam.filters.corners import CornerExtractor, CornerParams
+from mazeslam.filters.fastslam import FastSLAM, FastSLAMParams, UpdateReport
+from mazeslam.scans import resolve_geometry
+
+
+@dataclass
+class SlamResult:
+    """A filter run over a log.
+
+    Attributes:
+        times: (R,) the log's record times, s.
+        mean_poses: (R, 3) weighted-mean pose after each record (world frame).
+        best_poses: (R, 3) pose of the most probable particle after each record.
+        landmarks: (L, 2) and landmark_covariances (L, 2, 2): the best particle's final map.
+        step_seconds: (R,) wall-clock seconds each record took.
+        reports: one ``UpdateReport`` per scan.
+        resamplings: how many times the filter resampled.
+        filter: the final filter (particles, weights, maps) for inspection.
+        snapshots: every ``snapshot_every``-th scan: (record index, particle poses (P, 3), best
+            particle's landmarks (L, 2)), for animations.
+    """
+
+    times: np.ndarray
+    mean_poses: np.ndarray
+    best_poses: np.ndarray
+    landmarks: np.ndarray
+    landmark_covariances: np.ndarray
+    step_seconds: np.ndarray
+    reports: list[UpdateReport] = field(default_factory=list)
+    resamplings: int = 0
+    filter: FastSLAM | None = None
+    snapshots: list = field(default_factory=list)
+
+
+def run_fastslam(course_log: log.CourseLog, params: FastSLAMParams | None = None,
+                 corner_params: CornerParams | None = None, geometry: BeamGeometry = EXERCISE_CONVENTION,
+                 start_pose=(0.0, 0.0, 0.0), progress: bool = True, snapshot_every: int = 0) -> SlamResult:
+    """FastSLAM over every record of ``course_log``; see ``SlamResult``."""
+    params = params or FastSLAMParams()
+    slam = FastSLAM(params, start_pose)
+    extractor = CornerExtractor(geometry, course_log.width, corner_params) if course_log.n_beams else None
+    count = len(course_log)
+    mean_poses, best_poses, step_seconds = np.empty((count, 3)), np.empty((count, 3)), np.empty(count)
+    reports, snapshots = [], []
+    for record in tqdm(course_log.records(), total=count, desc="FastSLAM", unit="record", disable=not progress):
+        started = time.perf_counter()
+        if isinstance(record, log.OdometryRecord):
+            slam.predict(record.distance, record.turn)
+        else:
+            features = extractor.extract(record.ranges)
+            covariances = np.array([o.covariance_rb for o in features.observations]).reshape(-1, 2, 2)
+            reports.append(slam.update(features.observation_array(), covariances))
+            if snapshot_every and (len(reports) - 1) % snapshot_every == 0:
+                snapshots.append((record.index, slam.poses.copy(), slam.landmarks()[0]))
+        mean_poses[record.index] = slam.mean_pose()
+        best_poses[record.index] = slam.poses[slam.best_particle()]
+        step_seconds[record.index] = time.perf_counter() - started
+    landmarks, covariances = slam.landmarks()
+    return SlamResult(course_log.times, mean_poses, best_poses, landmarks, covariances, step_seconds, reports,
+                      slam.resamplings, slam, snapshots)
+
+
+def slam_on_file(path: str | Path, config: SlamConfig | None = None, progress: bool = True,
+                 snapshot_every: int = 0) -> SlamResult:
+    """``run_fastslam`` on a log file, with the beam geometry and start pose from its map sidecar
+    (the start pose is the origin for a log without one)."""
+    config = config or SlamConfig()
+    course_log = log.read(path)
+    geometry, _ = resolve_geometry(path, config.sensor.as_dict())
+    return run_fastslam(course_log, config.fastslam, config.corners, geometry, start_pose(path), progress,
+                        snapshot_every)
+
+
+def start_pose(path: str | Path) -> np.ndarray:
+    """The true start pose from a log's map sidecar, else the origin: where the filter starts."""
+    map_file = sidecars.map_path(path)
+    pose = sidecars.read_map(map_file).get("start_pose") if map_file.exists() else None
+    return np.asarray(pose if pose is not None else (0.0, 0.0, 0.0), dtype=float)
+
+
+@dataclass(frozen=True)
+class SensorOverrides:
+    """Beam-geometry settings that replace the log's own (its sidecar or the exercise default);
+    None keeps the log's. Radians and metres, see ``mazeslam.beams.BeamGeometry``."""
+
+    first_beam_angle: float | None = None
+    direction: int | None = None
+    mount_x: float | None = None
+    mount_y: float | None = None
+
+    def as_dict(self) -> dict:
+        return {k: v for k, v in dataclasses.asdict(self).items() if v is not None}
+
+
+@dataclass(frozen=True)
+class SlamConfig:
+    """Everything ``mazeslam slam`` needs; TOML sections ``[fastslam]``, ``[corners]`` (with
+    ``[corners.lines]``) and ``[sensor]``."""
+
+    fastslam: FastSLAMParams = field(default_factory=FastSLAMParams)
+    corners: CornerParams = field(default_factory=CornerParams)
+    sensor: SensorOverrides = field(default_factory=SensorOverrides)
+
+
+def load_slam_config(path: str | Path | None) -> SlamConfig:
+    """A ``SlamConfig`` from TOML, or the defaults when ``path`` is None."""
+    return SlamConfig() if path is None else load_toml(SlamConfig, path)
