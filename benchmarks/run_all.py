@@ -11,6 +11,7 @@ import pandas as pd
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 import bench_corners  # noqa: E402
+import bench_fastslam  # noqa: E402
 import bench_laser  # noqa: E402
 import bench_simulation  # noqa: E402
 
@@ -19,6 +20,7 @@ def main() -> int:
     with tempfile.TemporaryDirectory() as folder:
         tables = [pd.DataFrame([bench_laser.run()]), pd.DataFrame(bench_simulation.run()),
                   pd.DataFrame([bench_corners.speed(Path(folder))])]
+        tables += [pd.DataFrame([row]) for row in bench_fastslam.run()]
         for table in tables:
             print(table.set_index("benchmark").to_markdown(floatfmt=".3g"), end="\n\n")
         print(bench_corners.quality(Path(folder)).to_markdown(floatfmt=".4f"))

@@ -124,15 +124,20 @@ class FastSLAM:
         self.poses = predict_odometry(self.poses, distance, turn, p.sigmaX, p.sigmaTH, p.sigmaTH_drive, self.rng)
 
     # -- observation model --------------------------------------------------------------------
-    def _predicted(self):
-        """Predicted range/bearing (P, M, 2) of every landmark slot and the Jacobian H (P, M, 2, 2)."""
-        delta = self.means - self.poses[:, None, :2]
-        q = np.maximum(np.einsum("pmi,pmi->pm", delta, delta), 1e-12)
-        rho = np.sqrt(q)
-        bearing = wrap_angle(np.arctan2(delta[..., 1], delta[..., 0]) - self.poses[:, None, 2])
+    def _used_slots(self) -> int:
+        """Slots 0..m-1 hold every landmark of every particle; the rest is spare capacity."""
+        used = np.flatnonzero(self.exists.any(axis=0))
+        return int(used[-1]) + 1 if len(used) else 0
+
+    def _predicted(self, m: int):
+        """For the first ``m`` slots: predicted range and bearing (P, m) each, and the Jacobian
+        H = d(range, bearing)/d(landmark) as its four entries (P, m) each: [[a, b], [c, d]]."""
+        delta = self.means[:, :m] - self.poses[:, None, :2]
         dx, dy = delta[..., 0], delta[..., 1]
-        jacobian = np.stack([np.stack([dx / rho, dy / rho], -1), np.stack([-dy / q, dx / q], -1)], -2)
-        return np.stack([rho, bearing], -1), jacobian
+        q = np.maximum(dx * dx + dy * dy, 1e-12)
+        rho = np.sqrt(q)
+        bearing = wrap_angle(np.arctan2(dy, dx) - self.poses[:, None, 2])
+        return rho, bearing, (dx / rho, dy / rho, -dy / q, dx / q)
 
     def _noise(self, covariances: np.ndarray | None, count: int) -> np.ndarray:
         """Observation noise R (K, 2, 2): the fixed sigmaR/sigmaB plus each observation's own."""
@@ -155,28 +160,38 @@ class FastSLAM:
         report = UpdateReport(observations=len(observations))
         count = len(observations)
         if count:
+            if self.params.association == "known" and ids is None:
+                raise ValueError("association='known' needs the observations' ids")
             while (~self.exists).sum(axis=1).min() < count:  # room for every observation to start a landmark
                 self._grow()
             noise = self._noise(covariances, count)
-            predicted, jacobian = self._predicted()
-            base = jacobian @ self.covariances @ np.swapaxes(jacobian, -1, -2)  # (P, M, 2, 2)
-            innovation = observations[None, :, None, :] - predicted[:, None]  # (P, K, M, 2)
-            innovation[..., 1] = wrap_angle(innovation[..., 1])
-            s = base[:, None] + noise[None, :, None]  # (P, K, M, 2, 2)
-            s_inv, s_det = _inverse_2x2(s)
-            distance2 = np.einsum("pkmi,pkmij,pkmj->pkm", innovation, s_inv, innovation)
-            distance2[~np.broadcast_to(self.exists[:, None, :], distance2.shape)] = np.inf
+            m = self._used_slots()
+            rho, bearing, h = self._predicted(m)
+            a, b, c, d = h
+            sigma = self.covariances[:, :m]
+            s00, s01, s11 = sigma[..., 0, 0], sigma[..., 0, 1], sigma[..., 1, 1]
+            # H Sigma H^T, entry by entry (P, m)
+            base = (a * a * s00 + 2 * a * b * s01 + b * b * s11,
+                    a * c * s00 + (a * d + b * c) * s01 + b * d * s11,
+                    c * c * s00 + 2 * c * d * s01 + d * d * s11)
+            # S = H Sigma H^T + R and the innovation for every (particle, observation, slot): (P, K, m)
+            t00 = base[0][:, None] + noise[None, :, 0, 0, None]
+            t01 = base[1][:, None] + noise[None, :, 0, 1, None]
+            t11 = base[2][:, None] + noise[None, :, 1, 1, None]
+            det = t00 * t11 - t01 * t01
+            nu0 = observations[None, :, 0, None] - rho[:, None]
+            nu1 = wrap_angle(observations[None, :, 1, None] - bearing[:, None])
+            distance2 = (t11 * nu0 * nu0 - 2 * t01 * nu0 * nu1 + t00 * nu1 * nu1) / det
+            distance2[~np.broadcast_to(self.exists[:, None, :m], distance2.shape)] = np.inf
             if self.params.association == "known":
-                if ids is None:
-                    raise ValueError("association='known' needs the observations' ids")
-                assigned = self._associate_known(np.asarray(ids))
+                assigned = self._associate_known(np.asarray(ids), m)
             else:
                 assigned = self._associate(distance2)
             matched_now = np.zeros_like(self.exists)
+            model = {"h": h, "base": base, "nu": (nu0, nu1), "det": det, "distance2": distance2}
             for k in range(count):
-                self._apply(k, assigned[:, k], innovation, s_inv, s_det, distance2, jacobian, observations[k],
-                            noise[k], ids, matched_now, report)
-            self._manage_landmarks(matched_now, report)
+                self._apply(k, assigned[:, k], model, observations[k], noise[k], ids, matched_now, report)
+            self._manage_landmarks(rho, matched_now, report)
         report.effective_sample_size = self.effective_sample_size()
         if report.effective_sample_size < self.params.resample_threshold * self.params.NPARTICLES:
             self.resample()
@@ -191,8 +206,10 @@ class FastSLAM:
         for the next closest landmark or becomes new/ambiguous.
         """
         p, k, m = distance2.shape
-        remaining = distance2.copy()
         assigned = np.full((p, k), -1)
+        if m == 0:
+            return assigned
+        remaining = distance2.copy()
         rows = np.arange(p)
         for _ in range(min(k, m)):
             flat = remaining.reshape(p, -1).argmin(axis=1)
@@ -205,27 +222,34 @@ class FastSLAM:
             remaining[rows[ok], :, slot[ok]] = np.inf
         return assigned
 
-    def _associate_known(self, ids: np.ndarray) -> np.ndarray:
-        """(P, K) the slot holding each observation's identity, or -1."""
-        match = (self.ids[:, None, :] == ids[None, :, None]) & self.exists[:, None, :] & (ids[None, :, None] >= 0)
+    def _associate_known(self, ids: np.ndarray, m: int) -> np.ndarray:
+        """(P, K) the slot (among the first m) holding each observation's identity, or -1."""
+        if m == 0:
+            return np.full((len(self.poses), len(ids)), -1)
+        match = (self.ids[:, None, :m] == ids[None, :, None]) & self.exists[:, None, :m] & (ids[None, :, None] >= 0)
         return np.where(match.any(axis=2), match.argmax(axis=2), -1)
 
-    def _apply(self, k, slots, innovation, s_inv, s_det, distance2, jacobian, observation, noise, ids, matched_now,
-               report) -> None:
+    def _apply(self, k, slots, model, observation, noise, ids, matched_now, report) -> None:
         """EKF-update the landmarks matched by observation k, start new ones, and weigh the particles."""
+        distance2 = model["distance2"]
         rows = np.flatnonzero(slots >= 0)
         if len(rows):
             j = slots[rows]
-            h = jacobian[rows, j]  # (n, 2, 2)
+            h = np.stack([np.stack([model["h"][0][rows, j], model["h"][1][rows, j]], -1),
+                          np.stack([model["h"][2][rows, j], model["h"][3][rows, j]], -1)], -2)  # (n, 2, 2)
+            base00, base01, base11 = (entry[rows, j] for entry in model["base"])
+            t00, t01, t11 = base00 + noise[0, 0], base01 + noise[0, 1], base11 + noise[1, 1]
+            det = model["det"][rows, k, j]
+            s_inv = np.stack([np.stack([t11, -t01], -1), np.stack([-t01, t00], -1)], -2) / det[:, None, None]
             sigma = self.covariances[rows, j]
-            gain = sigma @ np.swapaxes(h, -1, -2) @ s_inv[rows, k, j]  # (n, 2, 2)
-            nu = innovation[rows, k, j]
+            gain = sigma @ np.swapaxes(h, -1, -2) @ s_inv  # (n, 2, 2)
+            nu = np.column_stack([model["nu"][0][rows, k, j], model["nu"][1][rows, k, j]])
             self.means[rows, j] += np.einsum("nij,nj->ni", gain, nu)
             identity_minus = np.eye(2) - gain @ h
             # Joseph form keeps the covariance symmetric and positive definite.
             self.covariances[rows, j] = (identity_minus @ sigma @ np.swapaxes(identity_minus, -1, -2)
                                          + gain @ noise @ np.swapaxes(gain, -1, -2))
-            self.log_weights[rows] += -0.5 * distance2[rows, k, j] - LOG_TWO_PI - 0.5 * np.log(s_det[rows, k, j])
+            self.log_weights[rows] += -0.5 * distance2[rows, k, j] - LOG_TWO_PI - 0.5 * np.log(det)
             self.seen[rows, j] += 1
             self.missed[rows, j] = 0
             matched_now[rows, j] = True
@@ -267,11 +291,13 @@ class FastSLAM:
         self.missed = np.concatenate([self.missed, np.zeros((p, m), dtype=np.int32)], axis=1)
         self.ids = np.concatenate([self.ids, np.full((p, m), -1, dtype=np.int64)], axis=1)
 
-    def _manage_landmarks(self, matched_now: np.ndarray, report: UpdateReport) -> None:
-        """Count misses of tentative landmarks predicted in view, and remove repeatedly missed ones."""
-        distance = np.linalg.norm(self.means - self.poses[:, None, :2], axis=-1)
-        in_view = self.exists & (self.seen <= 1) & ~matched_now & (distance < self.params.view_range)
-        self.missed[in_view] += 1
+    def _manage_landmarks(self, predicted_range: np.ndarray, matched_now: np.ndarray, report: UpdateReport) -> None:
+        """Count misses of tentative landmarks predicted in view (``predicted_range`` (P, m) of the
+        slots that existed before this scan), and remove repeatedly missed ones."""
+        m = predicted_range.shape[1]
+        in_view = (self.exists[:, :m] & (self.seen[:, :m] <= 1) & ~matched_now[:, :m]
+                   & (predicted_range < self.params.view_range))
+        self.missed[:, :m][in_view] += 1
         remove = self.exists & (self.missed >= self.params.tentative_limit)
         report.removed += int(remove.sum())
         self.exists[remove] = False
@@ -317,11 +343,3 @@ class FastSLAM:
         keep = self.exists[particle]
         return self.means[particle, keep], self.covariances[particle, keep]
 
-
-def _inverse_2x2(matrices: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Inverses and determinants of a stack of 2x2 matrices (..., 2, 2)."""
-    a, b = matrices[..., 0, 0], matrices[..., 0, 1]
-    c, d = matrices[..., 1, 0], matrices[..., 1, 1]
-    det = a * d - b * c
-    inverse = np.stack([np.stack([d, -b], -1), np.stack([-c, a], -1)], -2) / det[..., None, None]
-    return inverse, det
