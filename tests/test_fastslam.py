@@ -160,3 +160,32 @@ def test_landmark_slots_grow_as_needed():
 def test_impossible_filter_parameters(kwargs):
     with pytest.raises(ValueError):
         FastSLAMParams(**kwargs)
+
+
+def test_fastslam2_draws_poses_from_the_kalman_posterior_of_motion_and_observation():
+    # Robot believed at the origin with 5 cm of x-uncertainty from the motion; a landmark known to
+    # 1 mm straight ahead at 0.3 m is seen at 0.27 m: the posterior along x is the 1-D Kalman
+    # combination of the motion (5 cm) and the observation (1 cm range noise plus the landmark).
+    params = FastSLAMParams(NPARTICLES=4000, sigmaR=0.01, sigmaB=0.01, use_observation_covariance=False,
+                            resample_threshold=0, version=2, view_range=0.0, seed=1)
+    slam = FastSLAM(params)
+    slam.exists[:, 0] = True
+    slam.means[:, 0] = (0.3, 0.0)
+    slam.covariances[:, 0] = np.eye(2) * 1e-6
+    slam.seen[:, 0] = 5
+    slam.pose_covariances[:, 0, 0] = 0.05**2
+    slam.update(np.array([[0.27, 0.0]]))
+    prior, measured = 0.05**2, 0.01**2 + 1e-6
+    expected_mean = prior / (prior + measured) * 0.03  # the landmark looks 3 cm nearer: the robot moved on
+    expected_std = math.sqrt(prior * measured / (prior + measured))
+    assert slam.poses[:, 0].mean() == pytest.approx(expected_mean, abs=3e-4)
+    assert slam.poses[:, 0].std() == pytest.approx(expected_std, rel=0.05)
+    assert np.allclose(slam.pose_covariances, 0)  # the motion's uncertainty is spent
+
+
+def test_fastslam2_keeps_more_particles_alive(default_run):
+    from mazeslam.slam import SlamConfig, slam_on_file
+
+    runs = {v: slam_on_file(default_run.log_path, SlamConfig(fastslam=FastSLAMParams(version=v)), progress=False)
+            for v in (1, 2)}
+    assert runs[2].resamplings < 0.6 * runs[1].resamplings

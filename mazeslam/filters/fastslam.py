@@ -14,6 +14,8 @@ State (all world frame, metres and radians):
     seen         (P, M)        times the landmark was observed
     missed       (P, M)        scans it was predicted in view but not observed (tentative ones only)
     ids          (P, M)        known identity of the landmark (-1: unknown)
+    pose_covariances (P, 3, 3) FastSLAM 2.0 only: covariance of the motion since the last scan;
+                               ``poses`` then holds the mean of that motion until a scan samples it
 
 Observations are range and bearing ``z = (rho, phi)`` of a point landmark in the robot frame; the
 measurement model is ``h(x, m) = (|m - x|, atan2(m_y - y, m_x - x) - theta)``.
@@ -28,7 +30,7 @@ import numpy as np
 
 from mazeslam.config import require
 from mazeslam.filters.motion import predict_odometry
-from mazeslam.geometry import wrap_angle
+from mazeslam.geometry import advance_pose, wrap_angle
 
 LOG_TWO_PI = math.log(2 * math.pi)
 
@@ -36,6 +38,11 @@ LOG_TWO_PI = math.log(2 * math.pi)
 @dataclass(frozen=True)
 class FastSLAMParams:
     """Filter settings, named as in the exercise's control_panel.m where it has them.
+
+    The odometry defaults follow from the simulator's wheel slip (0.003 m per sqrt(m) per wheel,
+    wheelbase 53 mm) with a 25 % margin: distance 0.003/sqrt(2), heading from driving
+    0.003 sqrt(2)/0.053, heading from turning on the spot 0.003/sqrt(0.053) (each per square root of
+    the motion).
 
     Attributes:
         NPARTICLES: number of particles.
@@ -56,13 +63,17 @@ class FastSLAMParams:
         view_range: metres; a landmark this near is predicted to be observed.
         tentative_limit: a landmark seen only once is removed after this many scans in which it
             was predicted (within ``view_range``) but not observed.
+        version: 1 samples each pose from the motion model (the exercise's FastSLAM 1.0); 2 samples
+            it from the motion model combined with the scan's observations (FastSLAM 2.0,
+            Montemerlo et al. 2003), which keeps more particles alive when the sensor is much more
+            precise than the odometry.
         seed: seeds the filter's random draws.
     """
 
     NPARTICLES: int = 100
-    sigmaX: float = 0.005
-    sigmaTH: float = 0.03
-    sigmaTH_drive: float = 0.12
+    sigmaX: float = 0.0027
+    sigmaTH: float = 0.017
+    sigmaTH_drive: float = 0.1
     sigmaR: float = 0.003
     sigmaB: float = math.radians(1.0)
     use_observation_covariance: bool = True
@@ -72,6 +83,7 @@ class FastSLAMParams:
     association: str = "unknown"
     view_range: float = 0.25
     tentative_limit: int = 3
+    version: int = 1
     seed: int = 0
 
     def __post_init__(self):
@@ -85,6 +97,7 @@ class FastSLAMParams:
         require(0 <= self.resample_threshold <= 1, f"resample_threshold must be in [0, 1], got {self.resample_threshold}")
         require(self.association in ("unknown", "known"), f"association must be 'unknown' or 'known', got {self.association!r}")
         require(self.view_range >= 0 and self.tentative_limit >= 1, "view_range must be >= 0 and tentative_limit >= 1")
+        require(self.version in (1, 2), f"version must be 1 or 2 (FastSLAM 1.0 or 2.0), got {self.version}")
 
 
 @dataclass
@@ -115,13 +128,35 @@ class FastSLAM:
         self.seen = np.zeros((p, capacity), dtype=np.int32)
         self.missed = np.zeros((p, capacity), dtype=np.int32)
         self.ids = np.full((p, capacity), -1, dtype=np.int64)
+        self.pose_covariances = np.zeros((p, 3, 3))
         self.resamplings = 0
 
     # -- motion -----------------------------------------------------------------------------
     def predict(self, distance: float, turn: float) -> None:
-        """Move every particle by an odometry increment (metres, radians) with its own noise."""
+        """Move every particle by an odometry increment (metres, radians).
+
+        FastSLAM 1.0 draws each particle's noise now. FastSLAM 2.0 moves the particles' means
+        without noise and accumulates the motion's covariance, to be combined with the next scan's
+        observations (``update``) before a pose is drawn.
+        """
         p = self.params
-        self.poses = predict_odometry(self.poses, distance, turn, p.sigmaX, p.sigmaTH, p.sigmaTH_drive, self.rng)
+        if p.version == 1:
+            self.poses = predict_odometry(self.poses, distance, turn, p.sigmaX, p.sigmaTH, p.sigmaTH_drive, self.rng)
+            return
+        if distance == 0.0 and turn == 0.0:
+            return
+        heading = self.poses[:, 2] + 0.5 * turn
+        cos_h, sin_h = np.cos(heading), np.sin(heading)
+        count = len(self.poses)
+        # Jacobians of advance_pose with respect to the pose (F) and to (distance, turn) (V).
+        f = np.tile(np.eye(3), (count, 1, 1))
+        f[:, 0, 2], f[:, 1, 2] = -distance * sin_h, distance * cos_h
+        v = np.zeros((count, 3, 2))
+        v[:, 0, 0], v[:, 1, 0] = cos_h, sin_h
+        v[:, 0, 1], v[:, 1, 1], v[:, 2, 1] = -0.5 * distance * sin_h, 0.5 * distance * cos_h, 1.0
+        motion = np.diag([p.sigmaX**2 * abs(distance), p.sigmaTH**2 * abs(turn) + p.sigmaTH_drive**2 * abs(distance)])
+        self.pose_covariances = f @ self.pose_covariances @ np.swapaxes(f, 1, 2) + v @ motion @ np.swapaxes(v, 1, 2)
+        self.poses = advance_pose(self.poses, distance, turn)
 
     # -- observation model --------------------------------------------------------------------
     def _used_slots(self) -> int:
@@ -159,44 +194,93 @@ class FastSLAM:
         observations = np.asarray(observations, dtype=float).reshape(-1, 2)
         report = UpdateReport(observations=len(observations))
         count = len(observations)
+        if count and self.params.association == "known" and ids is None:
+            raise ValueError("association='known' needs the observations' ids")
+        while count and (~self.exists).sum(axis=1).min() < count:  # room for every observation to start a landmark
+            self._grow()
+        noise = self._noise(covariances, count)
+        m = self._used_slots()
+        two = self.params.version == 2
+        prior = self._model(observations, noise, m, with_pose_uncertainty=two)
+        if self.params.association == "known" and count:
+            assigned = self._associate_known(np.asarray(ids), m)
+        else:
+            assigned = self._associate(prior["distance2"])
+        if two:
+            self._draw_poses(assigned, observations, noise)
+        model = self._model(observations, noise, m, with_pose_uncertainty=False) if two else prior
+        matched_now = np.zeros_like(self.exists)
+        for k in range(count):
+            self._apply(k, assigned[:, k], model, prior, observations[k], noise[k], ids, matched_now, report)
         if count:
-            if self.params.association == "known" and ids is None:
-                raise ValueError("association='known' needs the observations' ids")
-            while (~self.exists).sum(axis=1).min() < count:  # room for every observation to start a landmark
-                self._grow()
-            noise = self._noise(covariances, count)
-            m = self._used_slots()
-            rho, bearing, h = self._predicted(m)
-            a, b, c, d = h
-            sigma = self.covariances[:, :m]
-            s00, s01, s11 = sigma[..., 0, 0], sigma[..., 0, 1], sigma[..., 1, 1]
-            # H Sigma H^T, entry by entry (P, m)
-            base = (a * a * s00 + 2 * a * b * s01 + b * b * s11,
-                    a * c * s00 + (a * d + b * c) * s01 + b * d * s11,
-                    c * c * s00 + 2 * c * d * s01 + d * d * s11)
-            # S = H Sigma H^T + R and the innovation for every (particle, observation, slot): (P, K, m)
-            t00 = base[0][:, None] + noise[None, :, 0, 0, None]
-            t01 = base[1][:, None] + noise[None, :, 0, 1, None]
-            t11 = base[2][:, None] + noise[None, :, 1, 1, None]
-            det = t00 * t11 - t01 * t01
-            nu0 = observations[None, :, 0, None] - rho[:, None]
-            nu1 = wrap_angle(observations[None, :, 1, None] - bearing[:, None])
-            distance2 = (t11 * nu0 * nu0 - 2 * t01 * nu0 * nu1 + t00 * nu1 * nu1) / det
-            distance2[~np.broadcast_to(self.exists[:, None, :m], distance2.shape)] = np.inf
-            if self.params.association == "known":
-                assigned = self._associate_known(np.asarray(ids), m)
-            else:
-                assigned = self._associate(distance2)
-            matched_now = np.zeros_like(self.exists)
-            model = {"h": h, "base": base, "nu": (nu0, nu1), "det": det, "distance2": distance2}
-            for k in range(count):
-                self._apply(k, assigned[:, k], model, observations[k], noise[k], ids, matched_now, report)
-            self._manage_landmarks(rho, matched_now, report)
+            self._manage_landmarks(model["rho"], matched_now, report)
         report.effective_sample_size = self.effective_sample_size()
         if report.effective_sample_size < self.params.resample_threshold * self.params.NPARTICLES:
             self.resample()
             report.resampled = True
         return report
+
+    def _model(self, observations: np.ndarray, noise: np.ndarray, m: int, with_pose_uncertainty: bool) -> dict:
+        """The measurement model of the first ``m`` slots at the current poses.
+
+        Returns a dict of arrays: ``rho``, ``bearing`` (P, m); ``h`` the landmark Jacobian's entries
+        (a, b, c, d), each (P, m); ``base`` the entries (00, 01, 11) of H Sigma H^T, each (P, m);
+        ``nu`` the innovations (range, bearing), each (P, K, m); ``det`` and ``distance2`` of
+        S = H Sigma H^T + R (+ Gx Sigma_x Gx^T with the pose's uncertainty), each (P, K, m).
+        """
+        rho, bearing, h = self._predicted(m)
+        a, b, c, d = h
+        sigma = self.covariances[:, :m]
+        s00, s01, s11 = sigma[..., 0, 0], sigma[..., 0, 1], sigma[..., 1, 1]
+        base = (a * a * s00 + 2 * a * b * s01 + b * b * s11,
+                a * c * s00 + (a * d + b * c) * s01 + b * d * s11,
+                c * c * s00 + 2 * c * d * s01 + d * d * s11)
+        t00, t01, t11 = base
+        if with_pose_uncertainty:
+            gx = np.stack([np.stack([-a, -b, np.zeros_like(a)], -1), np.stack([-c, -d, -np.ones_like(a)], -1)], -2)
+            pose_term = gx @ self.pose_covariances[:, None] @ np.swapaxes(gx, -1, -2)  # (P, m, 2, 2)
+            t00, t01, t11 = t00 + pose_term[..., 0, 0], t01 + pose_term[..., 0, 1], t11 + pose_term[..., 1, 1]
+        t00 = t00[:, None] + noise[None, :, 0, 0, None]
+        t01 = t01[:, None] + noise[None, :, 0, 1, None]
+        t11 = t11[:, None] + noise[None, :, 1, 1, None]
+        det = t00 * t11 - t01 * t01
+        nu0 = observations[None, :, 0, None] - rho[:, None]
+        nu1 = wrap_angle(observations[None, :, 1, None] - bearing[:, None])
+        distance2 = (t11 * nu0 * nu0 - 2 * t01 * nu0 * nu1 + t00 * nu1 * nu1) / det
+        distance2[~np.broadcast_to(self.exists[:, None, :m], distance2.shape)] = np.inf
+        return {"rho": rho, "bearing": bearing, "h": h, "base": base, "nu": (nu0, nu1), "det": det,
+                "distance2": distance2}
+
+    def _draw_poses(self, assigned: np.ndarray, observations: np.ndarray, noise: np.ndarray) -> None:
+        """FastSLAM 2.0's proposal: each particle's motion Gaussian (mean ``poses``, covariance
+        ``pose_covariances``) is corrected by its associated observations, one EKF step each, and
+        the pose is drawn from the result."""
+        mean, covariance = self.poses.copy(), self.pose_covariances.copy()
+        for k in range(len(observations)):
+            rows = np.flatnonzero(assigned[:, k] >= 0)
+            if not len(rows):
+                continue
+            j = assigned[rows, k]
+            delta = self.means[rows, j] - mean[rows, :2]
+            dx, dy = delta[:, 0], delta[:, 1]
+            q = np.maximum(dx * dx + dy * dy, 1e-12)
+            rho = np.sqrt(q)
+            h = np.stack([np.stack([dx / rho, dy / rho], -1), np.stack([-dy / q, dx / q], -1)], -2)  # (n, 2, 2)
+            gx = np.concatenate([-h, np.stack([np.zeros(len(rows)), -np.ones(len(rows))], -1)[..., None]], -1)
+            q_matrix = h @ self.covariances[rows, j] @ np.swapaxes(h, -1, -2) + noise[k]
+            sigma = covariance[rows]
+            s = gx @ sigma @ np.swapaxes(gx, -1, -2) + q_matrix
+            gain = sigma @ np.swapaxes(gx, -1, -2) @ np.linalg.inv(s)  # (n, 3, 2)
+            nu = np.column_stack([observations[k, 0] - rho,
+                                  wrap_angle(observations[k, 1] - (np.arctan2(dy, dx) - mean[rows, 2]))])
+            mean[rows] += np.einsum("nij,nj->ni", gain, nu)
+            corrected = (np.eye(3) - gain @ gx) @ sigma
+            covariance[rows] = 0.5 * (corrected + np.swapaxes(corrected, -1, -2))
+        values, vectors = np.linalg.eigh(covariance)
+        draws = self.rng.standard_normal(mean.shape) * np.sqrt(np.clip(values, 0, None))
+        self.poses = mean + np.einsum("pij,pj->pi", vectors, draws)
+        self.poses[:, 2] = wrap_angle(self.poses[:, 2])
+        self.pose_covariances = np.zeros_like(covariance)
 
     def _associate(self, distance2: np.ndarray) -> np.ndarray:
         """Greedy one-to-one maximum-likelihood association per particle: (P, K) landmark slot or -1.
@@ -229,9 +313,14 @@ class FastSLAM:
         match = (self.ids[:, None, :m] == ids[None, :, None]) & self.exists[:, None, :m] & (ids[None, :, None] >= 0)
         return np.where(match.any(axis=2), match.argmax(axis=2), -1)
 
-    def _apply(self, k, slots, model, observation, noise, ids, matched_now, report) -> None:
-        """EKF-update the landmarks matched by observation k, start new ones, and weigh the particles."""
-        distance2 = model["distance2"]
+    def _apply(self, k, slots, model, prior, observation, noise, ids, matched_now, report) -> None:
+        """EKF-update the landmarks matched by observation k, start new ones, and weigh the particles.
+
+        ``model`` linearises at the poses the particles now have; ``prior`` is the model the
+        association used, whose Mahalanobis distances weigh the particles (the same dict for
+        FastSLAM 1.0; for 2.0 it includes the motion's uncertainty, before the pose was drawn).
+        """
+        distance2 = prior["distance2"]
         rows = np.flatnonzero(slots >= 0)
         if len(rows):
             j = slots[rows]
@@ -239,7 +328,7 @@ class FastSLAM:
                           np.stack([model["h"][2][rows, j], model["h"][3][rows, j]], -1)], -2)  # (n, 2, 2)
             base00, base01, base11 = (entry[rows, j] for entry in model["base"])
             t00, t01, t11 = base00 + noise[0, 0], base01 + noise[0, 1], base11 + noise[1, 1]
-            det = model["det"][rows, k, j]
+            det = t00 * t11 - t01 * t01
             s_inv = np.stack([np.stack([t11, -t01], -1), np.stack([-t01, t00], -1)], -2) / det[:, None, None]
             sigma = self.covariances[rows, j]
             gain = sigma @ np.swapaxes(h, -1, -2) @ s_inv  # (n, 2, 2)
@@ -249,7 +338,8 @@ class FastSLAM:
             # Joseph form keeps the covariance symmetric and positive definite.
             self.covariances[rows, j] = (identity_minus @ sigma @ np.swapaxes(identity_minus, -1, -2)
                                          + gain @ noise @ np.swapaxes(gain, -1, -2))
-            self.log_weights[rows] += -0.5 * distance2[rows, k, j] - LOG_TWO_PI - 0.5 * np.log(det)
+            self.log_weights[rows] += (-0.5 * distance2[rows, k, j] - LOG_TWO_PI
+                                       - 0.5 * np.log(prior["det"][rows, k, j]))
             self.seen[rows, j] += 1
             self.missed[rows, j] = 0
             matched_now[rows, j] = True
@@ -321,7 +411,7 @@ class FastSLAM:
         cumulative = np.cumsum(self.weights())
         cumulative[-1] = 1.0
         index = np.searchsorted(cumulative, positions)
-        for name in ("poses", "means", "covariances", "exists", "seen", "missed", "ids"):
+        for name in ("poses", "means", "covariances", "exists", "seen", "missed", "ids", "pose_covariances"):
             setattr(self, name, getattr(self, name)[index])
         self.log_weights = np.full(p, -math.log(p))
         self.resamplings += 1
