@@ -90,7 +90,7 @@ def info(log_file, lenient):
     facts = log.summary(course_log)
     click.echo(f"{facts['source']}: valid course log")
     click.echo(f"  records           {facts['records']} ({facts['odometry_records']} odometry, "
-               f"{facts['scan_records']} scans)")
+               f"{facts['scan_records']} scans, {facts['landmark_records']} landmark observations)")
     click.echo(f"  time              {facts['start_s']:.3f} s + {facts['duration_s']:.3f} s")
     click.echo(f"  beams per scan    {facts['beams'] if facts['beams'] is not None else 'no scans'}")
     click.echo(f"  odometry travel   {facts['distance_m']:.3f} m, turned {facts['total_rotation_rad']:.3f} rad "
@@ -111,8 +111,11 @@ def _echo_sidecars(log_file: Path) -> None:
 
     truth, world = sidecars.truth_path(log_file), sidecars.map_path(log_file)
     click.echo(f"  ground truth      {truth if truth.exists() else 'none'}")
-    if world.exists():
-        geometry = sidecars.beam_geometry(sidecars.read_map(world)["sensor"])
+    sensor = sidecars.read_map(world)["sensor"] if world.exists() else None
+    if sensor is not None and "kind" in sensor:
+        click.echo(f"  map               {world}: sensor {sensor['kind']}")
+    elif sensor is not None:
+        geometry = sidecars.beam_geometry(sensor)
         click.echo(f"  map               {world}: beam 0 at {geometry.first_beam_angle:+.4f} rad, "
                    f"{'counter-clockwise' if geometry.direction > 0 else 'clockwise'}, "
                    f"sensor at ({geometry.mount_x:.3f}, {geometry.mount_y:.3f}) m")
@@ -177,17 +180,43 @@ def corners(log_file, scan_number, plot_path, animation_path, json_path, config_
 @click.option("--out", "out_dir", type=click.Path(file_okay=False, path_type=Path),
               help="Folder for trajectory.csv, map.json, slam.png [default: beside the log, <name>.slam/].")
 @click.option("--seed", type=int, help="Seed of the filter's random draws [default: from the config, 0].")
+@click.option("--association", type=click.Choice(["unknown", "known"]),
+              help="unknown: maximum likelihood with a gate; known: the landmark records' identities.")
+@click.option("--version", "version", type=click.Choice(["1", "2"]), help="FastSLAM 1.0 or 2.0.")
 @click.option("--animate", is_flag=True, help="Also write slam.gif (particles and map over time).")
 @beam_geometry_options
 @click.option("--quiet", is_flag=True, help="No progress bar.")
-def slam(log_file, particles, config_path, out_dir, seed, animate, first_beam_angle, beam_direction, mount_x, quiet):
+def slam(log_file, particles, config_path, out_dir, seed, association, version, animate, first_beam_angle,
+         beam_direction, mount_x, quiet):
     """Run FastSLAM on a course log: trajectory, map, the exercise's figure, and errors when truth exists."""
     from mazeslam.slam_command import run_slam_command
 
     overrides = _geometry_overrides(first_beam_angle, beam_direction, mount_x)
     out_dir = out_dir or log_file.with_name(f"{log_file.stem}.slam")
-    lines = run_slam_command(log_file, config_path, out_dir, particles, seed, overrides, animate, not quiet)
+    filter_changes = {"NPARTICLES": particles, "seed": seed, "association": association,
+                      "version": int(version) if version else None}
+    lines = run_slam_command(log_file, config_path, out_dir, filter_changes, overrides, animate, not quiet)
     click.echo("\n".join(lines))
+
+
+@main.group(name="import")
+def import_group():
+    """Turn other datasets into course logs with truth and map sidecars."""
+
+
+@import_group.command(name="mrclam")
+@click.argument("dataset", type=click.Path(exists=True, file_okay=False, path_type=Path))
+@click.option("--robot", type=click.IntRange(1, 5), required=True, help="Which of the 5 robots.")
+@click.option("--out", "out", type=click.Path(dir_okay=False, path_type=Path), required=True,
+              help="Course log to write, e.g. runs/mrclam1.log; sidecars go beside it.")
+def import_mrclam_command(dataset, robot, out):
+    """UTIAS MRCLAM: velocity odometry and barcoded landmark observations, Vicon truth."""
+    from mazeslam.imports.mrclam import import_mrclam
+
+    counts = import_mrclam(dataset, robot, out)
+    skipped = ", ".join(f"{count} {reason}" for reason, count in counts["skipped"].items()) or "none"
+    click.echo(f"wrote {out}: {counts['records']} records ({counts['odometry_records']} odometry, "
+               f"{counts['landmark_records']} landmark observations); measurements left out: {skipped}")
 
 
 @main.command()

@@ -5,8 +5,13 @@ One record a line, values separated by whitespace or commas::
     timestamp 0 dX dTheta -1 -1 ... -1      odometry: metres travelled, radians turned since the
                                             previous odometry record; padded with -1 to the width
     timestamp 1 r_0 r_1 ... r_{N-1}         scan: N ranges in metres, 0 = no return
+    timestamp 2 id range bearing -1 ... -1  landmark observation (mazeslam's extension, not in the
+                                            exercise): a point landmark with a known identity
+                                            (an integer >= 0; -1 if unknown) seen at range (m) and
+                                            bearing (rad) in the robot frame
 
-Every line of a log has the same number of values (N + 2). Blank lines and lines starting with
+Every line of a log has the same number of values (N + 2, and at least 5 in a log with landmark
+observations). Blank lines and lines starting with
 ``#`` or ``%`` are comments. Timestamps (seconds) never decrease. mazeslam writes values separated
 by single spaces with 6 decimals, like the exercise's logger, so a log written and read back gives
 the same numbers to 1e-6.
@@ -26,6 +31,7 @@ import numpy as np
 
 ODOMETRY = 0
 SCAN = 1
+LANDMARK = 2
 PADDING = -1.0
 DECIMALS = 6
 _COMMENT_PREFIXES = ("#", "%")
@@ -58,6 +64,14 @@ class ScanRecord(NamedTuple):
     index: int
     t: float
     ranges: np.ndarray  # (N,) metres, 0 = no return
+
+
+class LandmarkRecord(NamedTuple):
+    index: int
+    t: float
+    landmark: int  # identity, -1 if unknown
+    range: float  # metres, robot frame
+    bearing: float  # radians, robot frame
 
 
 @dataclass
@@ -116,13 +130,19 @@ class CourseLog:
     def duration(self) -> float:
         return float(self.times[-1] - self.times[0]) if len(self) else 0.0
 
-    def records(self) -> Iterator[OdometryRecord | ScanRecord]:
-        """The records in order, as ``OdometryRecord`` or ``ScanRecord``."""
+    @property
+    def is_landmark(self) -> np.ndarray:
+        return self.flags == LANDMARK
+
+    def records(self) -> Iterator[OdometryRecord | ScanRecord | LandmarkRecord]:
+        """The records in order, as ``OdometryRecord``, ``ScanRecord`` or ``LandmarkRecord``."""
         for index, (t, flag, row) in enumerate(zip(self.times, self.flags, self.values)):
             if flag == ODOMETRY:
                 yield OdometryRecord(index, float(t), float(row[0]), float(row[1]))
-            else:
+            elif flag == SCAN:
                 yield ScanRecord(index, float(t), row)
+            else:
+                yield LandmarkRecord(index, float(t), int(row[0]), float(row[1]), float(row[2]))
 
 
 def read(path: str | Path, strict: bool = True) -> CourseLog:
@@ -208,8 +228,19 @@ def _check_line(parts: list[str], width: int, previous_time: float, first_line: 
         negative = next((c for c, v in enumerate(values[2:], 3) if v < 0), None)
         if negative is not None:
             return None, f"scan has a negative range {parts[negative - 1]} in column {negative} (beam {negative - 3})"
+    elif flag == LANDMARK:
+        if width < 5:
+            return None, "a landmark record needs id, range and bearing (5 values at least)"
+        identity, rng = values[2], values[3]
+        if identity != int(identity) or identity < -1:
+            return None, f"landmark id {parts[2]} is not an integer >= -1"
+        if rng <= 0:
+            return None, f"landmark range {parts[3]} is not positive"
+        wrong = next((c for c, v in enumerate(values[5:], 6) if v != PADDING), None)
+        if wrong is not None:
+            return None, f"landmark record is not padded with -1 after id, range and bearing (column {wrong} is {parts[wrong - 1]})"
     else:
-        return None, f"flag {parts[1]} is neither 0 (odometry) nor 1 (scan)"
+        return None, f"flag {parts[1]} is not 0 (odometry), 1 (scan) or 2 (landmark)"
     if t < previous_time:
         return None, f"timestamp {parts[0]} is earlier than the previous record's {previous_time:.{DECIMALS}f}"
     return values, None
@@ -232,6 +263,7 @@ class LogWriter:
     def __init__(self, path: str | Path, beams: int):
         if beams < 2:
             raise ValueError(f"a course log needs at least 2 data columns (dX, dTheta), got {beams}")
+        self._landmark_padding = " ".join(["-1"] * (beams - 3))
         self.path = Path(path)
         self.beams = beams
         self.previous_time = -math.inf
@@ -262,6 +294,15 @@ class LogWriter:
             raise ValueError(f"{self.path}: scan ranges must be finite and >= 0 (0 = no return)")
         self._write(t, f"{t:.{DECIMALS}f} 1 " + " ".join(f"{r:.{DECIMALS}f}" for r in ranges))
 
+    def write_landmark(self, t: float, landmark: int, rng: float, bearing: float) -> None:
+        """One landmark observation (the extension record, flag 2): identity, range (m), bearing (rad)."""
+        if self.beams < 3:
+            raise ValueError(f"{self.path}: landmark records need 3 data columns, this log has {self.beams}")
+        if rng <= 0 or not np.isfinite([rng, bearing]).all():
+            raise ValueError(f"{self.path}: landmark range must be positive and finite, got {rng}, {bearing}")
+        fields = [f"{t:.{DECIMALS}f}", "2", str(int(landmark)), f"{rng:.{DECIMALS}f}", f"{bearing:.{DECIMALS}f}"]
+        self._write(t, " ".join(fields + ([self._landmark_padding] if self._landmark_padding else [])))
+
     def _write(self, t: float, line: str) -> None:
         if t < self.previous_time:
             raise ValueError(f"{self.path}: timestamp {t} is earlier than the previous record's {self.previous_time}")
@@ -276,8 +317,10 @@ def write(path: str | Path, log: CourseLog) -> None:
         for record in log.records():
             if isinstance(record, OdometryRecord):
                 writer.write_odometry(record.t, record.distance, record.turn)
-            else:
+            elif isinstance(record, ScanRecord):
                 writer.write_scan(record.t, record.ranges)
+            else:
+                writer.write_landmark(record.t, record.landmark, record.range, record.bearing)
 
 
 def summary(log: CourseLog) -> dict:
@@ -289,6 +332,7 @@ def summary(log: CourseLog) -> dict:
         "records": len(log),
         "odometry_records": int(log.is_odometry.sum()),
         "scan_records": int(log.is_scan.sum()),
+        "landmark_records": int(log.is_landmark.sum()),
         "beams": log.n_beams,
         "start_s": float(log.times[0]),
         "duration_s": log.duration,

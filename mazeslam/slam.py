@@ -61,22 +61,53 @@ def run_fastslam(course_log: log.CourseLog, params: FastSLAMParams | None = None
     count = len(course_log)
     mean_poses, best_poses, step_seconds = np.empty((count, 3)), np.empty((count, 3)), np.empty(count)
     reports, snapshots = [], []
-    for record in tqdm(course_log.records(), total=count, desc="FastSLAM", unit="record", disable=not progress):
+    records = list(course_log.records())
+    bar = tqdm(total=count, desc="FastSLAM", unit="record", disable=not progress)
+    position = 0
+    while position < count:
+        record = records[position]
         started = time.perf_counter()
         if isinstance(record, log.OdometryRecord):
             slam.predict(record.distance, record.turn)
+            done = [record]
         else:
-            features = extractor.extract(record.ranges)
-            covariances = np.array([o.covariance_rb for o in features.observations]).reshape(-1, 2, 2)
-            reports.append(slam.update(features.observation_array(), covariances))
+            if isinstance(record, log.ScanRecord):
+                done = [record]
+                z, covariances, ids = _scan_observations(extractor, record)
+            else:  # landmark observations: all those taken at one time update together
+                done = _same_time_landmarks(records, position)
+                z = np.array([[r.range, r.bearing] for r in done])
+                covariances, ids = None, np.array([r.landmark for r in done])
+            reports.append(slam.update(z, covariances, ids if params.association == "known" else None))
             if snapshot_every and (len(reports) - 1) % snapshot_every == 0:
                 snapshots.append((record.index, slam.poses.copy(), slam.landmarks()[0]))
-        mean_poses[record.index] = slam.mean_pose()
-        best_poses[record.index] = slam.poses[slam.best_particle()]
-        step_seconds[record.index] = time.perf_counter() - started
+        mean, best = slam.mean_pose(), slam.poses[slam.best_particle()]
+        for finished in done:
+            mean_poses[finished.index], best_poses[finished.index] = mean, best
+            step_seconds[finished.index] = (time.perf_counter() - started) / len(done)
+        position += len(done)
+        bar.update(len(done))
+    bar.close()
     landmarks, covariances = slam.landmarks()
     return SlamResult(course_log.times, mean_poses, best_poses, landmarks, covariances, step_seconds, reports,
                       slam.resamplings, slam, snapshots)
+
+
+def _scan_observations(extractor: CornerExtractor, record: log.ScanRecord):
+    """Corner observations of one scan: (K, 2) range/bearing, (K, 2, 2) covariances, no ids."""
+    observations = extractor.extract(record.ranges).observations
+    z = np.array([[o.range, o.bearing] for o in observations]).reshape(-1, 2)
+    return z, np.array([o.covariance_rb for o in observations]).reshape(-1, 2, 2), None
+
+
+def _same_time_landmarks(records: list, position: int) -> list:
+    """The landmark records from ``position`` on that share its timestamp."""
+    group = [records[position]]
+    for record in records[position + 1:]:
+        if not isinstance(record, log.LandmarkRecord) or record.t != group[0].t:
+            break
+        group.append(record)
+    return group
 
 
 def slam_on_file(path: str | Path, config: SlamConfig | None = None, progress: bool = True,
@@ -112,13 +143,22 @@ class SensorOverrides:
 
 
 @dataclass(frozen=True)
+class EvaluationParams:
+    """How a run is scored against truth: an estimated landmark counts as a true one's within
+    ``match_radius`` metres."""
+
+    match_radius: float = 0.05
+
+
+@dataclass(frozen=True)
 class SlamConfig:
     """Everything ``mazeslam slam`` needs; TOML sections ``[fastslam]``, ``[corners]`` (with
-    ``[corners.lines]``) and ``[sensor]``."""
+    ``[corners.lines]``), ``[sensor]`` and ``[evaluation]``."""
 
     fastslam: FastSLAMParams = field(default_factory=FastSLAMParams)
     corners: CornerParams = field(default_factory=CornerParams)
     sensor: SensorOverrides = field(default_factory=SensorOverrides)
+    evaluation: EvaluationParams = field(default_factory=EvaluationParams)
 
 
 def load_slam_config(path: str | Path | None) -> SlamConfig:

@@ -12,12 +12,12 @@ from mazeslam.scans import resolve_geometry
 from mazeslam.slam import load_slam_config, run_fastslam, start_pose
 
 
-def run_slam_command(log_file, config_path, out_dir, particles=None, seed=None, geometry_overrides=None,
+def run_slam_command(log_file, config_path, out_dir, filter_changes: dict | None = None, geometry_overrides=None,
                      animate=False, progress=True) -> list[str]:
     """Run, write ``out_dir``/{trajectory.csv, best_trajectory.csv, map.json, slam.png[, slam.gif]};
-    return the lines to print."""
+    return the lines to print. ``filter_changes`` replace ``[fastslam]`` settings (None: keep)."""
     config = load_slam_config(config_path)
-    changes = {k: v for k, v in (("NPARTICLES", particles), ("seed", seed)) if v is not None}
+    changes = {k: v for k, v in (filter_changes or {}).items() if v is not None}
     if changes:
         config = dataclasses.replace(config, fastslam=dataclasses.replace(config.fastslam, **changes))
     overrides = {**config.sensor.as_dict(), **{k: v for k, v in (geometry_overrides or {}).items() if v is not None}}
@@ -26,29 +26,33 @@ def run_slam_command(log_file, config_path, out_dir, particles=None, seed=None, 
     start = start_pose(log_file)
     result = run_fastslam(course_log, config.fastslam, config.corners, geometry, start, progress,
                           snapshot_every=2 if animate else 0)
-    lines = [f"{log_file}: {len(course_log)} records, {len(result.reports)} scans; beam geometry from {origin}",
+    lines = [f"{log_file}: {len(course_log)} records, {len(result.reports)} observation updates; beam geometry from {origin}",
              f"FastSLAM: {config.fastslam.NPARTICLES} particles, {result.resamplings} resamplings, "
              f"{len(result.landmarks)} landmarks in the best particle's map, "
              f"{result.step_seconds.sum():.2f} s ({course_log.duration / max(result.step_seconds.sum(), 1e-9):.0f}x real time)"]
-    evaluation = slam_report.evaluate_against_truth(log_file, course_log, result, start)
+    match_radius = config.evaluation.match_radius
+    evaluation = slam_report.evaluate_against_truth(log_file, course_log, result, start, match_radius)
     extra = {"source": str(log_file), "beam_geometry": geometry.to_dict(), "start_pose": start.tolist(),
              "parameters": jsonable(dataclasses.asdict(config))}
     if evaluation is not None:
         table, map_errors = evaluation
         lines += ["Absolute trajectory error against ground truth [m] (aligned: after the best rigid motion):",
-                  table.to_markdown(floatfmt=".4f"),
-                  f"Map: {map_errors['matched']} landmarks within 5 cm of a true corner, RMSE {map_errors['rmse']:.4f} m, "
-                  f"precision {map_errors['precision']:.2f}, recall {map_errors['recall']:.2f}"]
+                  table.to_markdown(floatfmt=".4f")]
+        for name, errors in map_errors.items():
+            lines.append(f"Map ({name}): {errors['matched']} landmarks within {match_radius:g} m of a true one, "
+                         f"RMSE {errors['rmse']:.4f} m, precision {errors['precision']:.2f}, recall {errors['recall']:.2f}")
         extra["ate"] = table.reset_index().to_dict(orient="records")
         extra["map_error"] = map_errors
     else:
         lines.append("no ground truth beside the log: no errors to report")
     paths = slam_report.write_outputs(out_dir, result, extra)
     truth = sidecars.read_truth(sidecars.truth_path(log_file))[1] if evaluation is not None else None
-    walls = sidecars.read_map(sidecars.map_path(log_file))["walls"] if sidecars.map_path(log_file).exists() else None
+    world = sidecars.read_map(sidecars.map_path(log_file)) if sidecars.map_path(log_file).exists() else {}
     points = slam_report.scan_points_world(course_log, result.mean_poses, geometry)
+    walls = world.get("walls")
     paths["figure"] = slam_report.plot_slam(Path(out_dir) / "slam.png", result, points, truth, walls,
-                                            title=f"{Path(log_file).name}: FastSLAM, {config.fastslam.NPARTICLES} particles")
+                                            title=f"{Path(log_file).name}: FastSLAM, {config.fastslam.NPARTICLES} particles",
+                                            true_landmarks=world.get("corners"))
     if animate:
         paths["animation"] = slam_report.animate_slam(Path(out_dir) / "slam.gif", result, points, truth, walls)
     lines.append("wrote " + ", ".join(str(p) for p in paths.values()))

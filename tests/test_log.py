@@ -72,7 +72,7 @@ def test_writer_refuses_bad_records(tmp_path):
         ("0.2 1 0.5 0.1 0.2", 3, "has 5 values, expected 6"),
         ("0.2 1 0.5 abc 0.2 0.3", 3, "value 'abc' in column 4 is not a number"),
         ("0.2 1 0.5 nan 0.2 0.3", 3, "column 4 is not finite"),
-        ("0.2 2 0.5 0.1 0.2 0.3", 3, "flag 2 is neither 0 (odometry) nor 1 (scan)"),
+        ("0.2 3 0.5 0.1 0.2 0.3", 3, "flag 3 is not 0 (odometry), 1 (scan) or 2 (landmark)"),
         ("0.05 1 0.5 0.1 0.2 0.3", 3, "timestamp 0.05 is earlier than the previous record's 0.100000"),
         ("0.2 0 0.01 0.0 0 0", 3, "not padded with -1 after dX and dTheta (column 5 is 0)"),
         ("0.2 1 0.5 -0.1 0.2 0.3", 3, "negative range -0.1 in column 4"),
@@ -118,3 +118,32 @@ def test_reads_the_exercise_robot_log(course_log_path):
     assert (facts["records"], facts["odometry_records"], facts["scan_records"], facts["beams"]) == (198, 146, 52, 360)
     assert facts["duration_s"] == pytest.approx(37.4, abs=0.1)
     assert 0.05 < facts["no_return_fraction"] < 0.15  # the README: about 10 % of beams
+
+
+def test_landmark_records_round_trip(tmp_path):
+    path = tmp_path / "lm.log"
+    with log.LogWriter(path, beams=3) as writer:
+        writer.write_odometry(0.1, 0.02, 0.01)
+        writer.write_landmark(0.1, 7, 2.5, -0.3)
+        writer.write_landmark(0.1, -1, 1.25, 0.5)
+    course_log = log.read(path)
+    records = list(course_log.records())
+    assert records[1] == log.LandmarkRecord(1, 0.1, 7, 2.5, -0.3)
+    assert records[2].landmark == -1
+    assert course_log.n_beams is None and log.summary(course_log)["landmark_records"] == 2
+    log.write(tmp_path / "again.log", course_log)
+    assert (tmp_path / "again.log").read_bytes() == path.read_bytes()
+
+
+@pytest.mark.parametrize(
+    "line, reason",
+    [("0.2 2 1.5 1.0 0.1", "landmark id 1.5 is not an integer"),
+     ("0.2 2 3 0 0.1", "landmark range 0 is not positive"),
+     ("0.2 2 3 1.0 0.1 7", None)],
+)
+def test_bad_landmark_records(line, reason):
+    width = len(line.split())
+    text = "0.0 0 0 0" + " -1" * (width - 4) + "\n" + line + "\n"
+    with pytest.raises(log.LogFormatError) as error:
+        log.parse(text, "lm.log")
+    assert (reason or "not padded with -1 after id, range and bearing") in str(error.value)

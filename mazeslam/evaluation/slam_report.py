@@ -16,7 +16,7 @@ from matplotlib.patches import Ellipse  # noqa: E402
 
 from mazeslam import log, sidecars  # noqa: E402
 from mazeslam.beams import BeamGeometry  # noqa: E402
-from mazeslam.evaluation.metrics import absolute_trajectory_error, map_error  # noqa: E402
+from mazeslam.evaluation.metrics import absolute_trajectory_error, align_se2, apply_se2, map_error  # noqa: E402
 from mazeslam.filters.motion import dead_reckoning  # noqa: E402
 from mazeslam.geometry import compose, polar_to_cartesian, transform_points  # noqa: E402
 from mazeslam.slam import SlamResult  # noqa: E402
@@ -33,8 +33,11 @@ def error_table(estimates: dict[str, np.ndarray], truth: np.ndarray) -> pd.DataF
     return pd.DataFrame(rows).set_index("estimator")
 
 
-def evaluate_against_truth(path, course_log: log.CourseLog, result: SlamResult, start) -> tuple[pd.DataFrame, dict] | None:
-    """The ATE table (dead reckoning and FastSLAM) and the map error, when the log has truth sidecars."""
+def evaluate_against_truth(path, course_log: log.CourseLog, result: SlamResult, start,
+                           match_radius: float = 0.05) -> tuple[pd.DataFrame, dict] | None:
+    """The ATE table (dead reckoning and FastSLAM) and the map errors, when the log has truth
+    sidecars: as estimated, and after moving the map by the rigid motion that best aligns the
+    estimated trajectory with the true one (the map shares the trajectory's frame)."""
     truth_file, map_file = sidecars.truth_path(path), sidecars.map_path(path)
     if not truth_file.exists():
         return None
@@ -42,7 +45,9 @@ def evaluate_against_truth(path, course_log: log.CourseLog, result: SlamResult, 
     estimates = {"dead reckoning": dead_reckoning(course_log, start), "FastSLAM (mean)": result.mean_poses,
                  "FastSLAM (best particle)": result.best_poses}
     corners = sidecars.read_map(map_file)["corners"] if map_file.exists() else np.empty((0, 2))
-    return error_table(estimates, truth), map_error(result.landmarks, corners)
+    aligned = apply_se2(align_se2(result.mean_poses, truth), result.landmarks) if len(result.landmarks) else result.landmarks
+    return error_table(estimates, truth), {"as estimated": map_error(result.landmarks, corners, match_radius),
+                                           "aligned": map_error(aligned, corners, match_radius)}
 
 
 def scan_points_world(course_log: log.CourseLog, poses: np.ndarray, geometry: BeamGeometry) -> np.ndarray:
@@ -58,16 +63,20 @@ def scan_points_world(course_log: log.CourseLog, poses: np.ndarray, geometry: Be
 
 
 def plot_slam(path, result: SlamResult, points: np.ndarray, truth: np.ndarray | None = None,
-              walls: np.ndarray | None = None, title: str = "") -> Path:
+              walls: np.ndarray | None = None, title: str = "", true_landmarks: np.ndarray | None = None) -> Path:
     """The exercise's figure: best particle's map with 2-sigma ellipses, particles in red, scan
-    points in black, the estimated path; with truth, the true path and walls too."""
+    points in black, the estimated path; with truth, the true path, walls and landmarks too."""
     fig, ax = plt.subplots(figsize=(9, 7))
     if walls is not None:
         for x1, y1, x2, y2 in walls:
             ax.plot([x1, x2], [y1, y2], color="0.6", linewidth=1.0)
-    ax.plot(points[:, 0], points[:, 1], ".", color="black", markersize=0.8, alpha=0.4, label="scan points")
+    if len(points):
+        ax.plot(points[:, 0], points[:, 1], ".", color="black", markersize=0.8, alpha=0.4, label="scan points")
     if truth is not None:
         ax.plot(truth[:, 0], truth[:, 1], color="tab:green", linewidth=1.2, label="true path")
+    if true_landmarks is not None and len(true_landmarks):
+        ax.plot(true_landmarks[:, 0], true_landmarks[:, 1], "o", color="tab:green", markersize=4,
+                markerfacecolor="none", label="true landmarks")
     ax.plot(result.mean_poses[:, 0], result.mean_poses[:, 1], color="tab:blue", linewidth=1.2, label="FastSLAM path")
     particles = result.filter.poses
     ax.plot(particles[:, 0], particles[:, 1], ".", color="red", markersize=3, label="particles")
@@ -100,7 +109,9 @@ def animate_slam(path, result: SlamResult, points: np.ndarray, truth: np.ndarray
                  walls: np.ndarray | None = None, frames_per_second: float = 5.0) -> Path:
     """A GIF of the run: particles (red), map so far (purple), path so far, one frame per snapshot."""
     fig, ax = plt.subplots(figsize=(6, 6))
-    low, high = points.min(axis=0) - 0.05, points.max(axis=0) + 0.05
+    extent = np.vstack([points, result.mean_poses[:, :2]] + ([truth[:, :2]] if truth is not None else []))
+    margin = 0.05 * (extent.max(axis=0) - extent.min(axis=0)).max()
+    low, high = extent.min(axis=0) - margin, extent.max(axis=0) + margin
 
     def draw(frame):
         index, particles, landmarks = result.snapshots[frame]
