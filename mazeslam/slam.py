@@ -7,6 +7,7 @@ moves the particles, a laser entry is turned into corner observations that weigh
 from __future__ import annotations
 
 import dataclasses
+import math
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -37,6 +38,7 @@ class SlamResult:
         filter: the final filter (particles, weights, maps) for inspection.
         snapshots: every ``snapshot_every``-th scan: (record index, particle poses (P, 3), best
             particle's landmarks (L, 2)), for animations.
+        dropped_odometry: the odometry records left out as glitches (``OdometryRecord``s).
     """
 
     times: np.ndarray
@@ -49,18 +51,21 @@ class SlamResult:
     resamplings: int = 0
     filter: FastSLAM | None = None
     snapshots: list = field(default_factory=list)
+    dropped_odometry: list = field(default_factory=list)
 
 
 def run_fastslam(course_log: log.CourseLog, params: FastSLAMParams | None = None,
                  corner_params: CornerParams | None = None, geometry: BeamGeometry = EXERCISE_CONVENTION,
-                 start_pose=(0.0, 0.0, 0.0), progress: bool = True, snapshot_every: int = 0) -> SlamResult:
-    """FastSLAM over every record of ``course_log``; see ``SlamResult``."""
+                 start_pose=(0.0, 0.0, 0.0), progress: bool = True, snapshot_every: int = 0,
+                 jump_tolerance: float = math.inf) -> SlamResult:
+    """FastSLAM over every record of ``course_log``; odometry records travelling more than
+    ``jump_tolerance`` metres are left out (listed in ``SlamResult.dropped_odometry``)."""
     params = params or FastSLAMParams()
     slam = FastSLAM(params, start_pose)
     extractor = CornerExtractor(geometry, course_log.width, corner_params) if course_log.n_beams else None
     count = len(course_log)
     mean_poses, best_poses, step_seconds = np.empty((count, 3)), np.empty((count, 3)), np.empty(count)
-    reports, snapshots = [], []
+    reports, snapshots, dropped = [], [], []
     records = list(course_log.records())
     bar = tqdm(total=count, desc="FastSLAM", unit="record", disable=not progress)
     position = 0
@@ -68,7 +73,10 @@ def run_fastslam(course_log: log.CourseLog, params: FastSLAMParams | None = None
         record = records[position]
         started = time.perf_counter()
         if isinstance(record, log.OdometryRecord):
-            slam.predict(record.distance, record.turn)
+            if abs(record.distance) > jump_tolerance:
+                dropped.append(record)
+            else:
+                slam.predict(record.distance, record.turn)
             done = [record]
         else:
             if isinstance(record, log.ScanRecord):
@@ -90,7 +98,7 @@ def run_fastslam(course_log: log.CourseLog, params: FastSLAMParams | None = None
     bar.close()
     landmarks, covariances = slam.landmarks()
     return SlamResult(course_log.times, mean_poses, best_poses, landmarks, covariances, step_seconds, reports,
-                      slam.resamplings, slam, snapshots)
+                      slam.resamplings, slam, snapshots, dropped)
 
 
 def _scan_observations(extractor: CornerExtractor, record: log.ScanRecord):
@@ -118,7 +126,7 @@ def slam_on_file(path: str | Path, config: SlamConfig | None = None, progress: b
     course_log = log.read(path)
     geometry, _ = resolve_geometry(path, config.sensor.as_dict())
     return run_fastslam(course_log, config.fastslam, config.corners, geometry, start_pose(path), progress,
-                        snapshot_every)
+                        snapshot_every, config.odometry.jump_tolerance)
 
 
 def start_pose(path: str | Path) -> np.ndarray:
@@ -143,6 +151,18 @@ class SensorOverrides:
 
 
 @dataclass(frozen=True)
+class OdometryCleaning:
+    """Odometry records to leave out: a record reporting more than ``jump_tolerance`` metres in one
+    step is a glitch (the exercise's TOL_JMP); every one left out is reported."""
+
+    jump_tolerance: float = math.inf
+
+    def __post_init__(self):
+        if not self.jump_tolerance > 0:
+            raise ValueError(f"jump_tolerance must be positive, got {self.jump_tolerance}")
+
+
+@dataclass(frozen=True)
 class EvaluationParams:
     """How a run is scored against truth: an estimated landmark counts as a true one's within
     ``match_radius`` metres."""
@@ -153,11 +173,12 @@ class EvaluationParams:
 @dataclass(frozen=True)
 class SlamConfig:
     """Everything ``mazeslam slam`` needs; TOML sections ``[fastslam]``, ``[corners]`` (with
-    ``[corners.lines]``), ``[sensor]`` and ``[evaluation]``."""
+    ``[corners.lines]``), ``[sensor]``, ``[odometry]`` and ``[evaluation]``."""
 
     fastslam: FastSLAMParams = field(default_factory=FastSLAMParams)
     corners: CornerParams = field(default_factory=CornerParams)
     sensor: SensorOverrides = field(default_factory=SensorOverrides)
+    odometry: OdometryCleaning = field(default_factory=OdometryCleaning)
     evaluation: EvaluationParams = field(default_factory=EvaluationParams)
 
 

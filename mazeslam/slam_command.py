@@ -25,12 +25,17 @@ def run_slam_command(log_file, config_path, out_dir, filter_changes: dict | None
     geometry, origin = resolve_geometry(log_file, overrides)
     start = start_pose(log_file)
     result = run_fastslam(course_log, config.fastslam, config.corners, geometry, start, progress,
-                          snapshot_every=2 if animate else 0)
+                          snapshot_every=2 if animate else 0, jump_tolerance=config.odometry.jump_tolerance)
     lines = [f"{log_file}: {len(course_log)} records, {len(result.reports)} observation updates; beam geometry from {origin}",
              f"FastSLAM: {config.fastslam.NPARTICLES} particles, {result.resamplings} resamplings, "
              f"{len(result.landmarks)} landmarks in the best particle's map, "
              f"{result.step_seconds.sum():.2f} s ({course_log.duration / max(result.step_seconds.sum(), 1e-9):.0f}x real time)"]
     match_radius = config.evaluation.match_radius
+    if result.dropped_odometry:
+        lines.append(f"left out {len(result.dropped_odometry)} odometry records travelling more than "
+                     f"{config.odometry.jump_tolerance:g} m in one step (glitches): "
+                     + ", ".join(f"line {course_log.line_numbers[r.index]} (t {r.t:.3f} s, dX {r.distance:+.4f} m, "
+                                 f"dTheta {r.turn:+.4f} rad)" for r in result.dropped_odometry))
     evaluation = slam_report.evaluate_against_truth(log_file, course_log, result, start, match_radius)
     extra = {"source": str(log_file), "beam_geometry": geometry.to_dict(), "start_pose": start.tolist(),
              "parameters": jsonable(dataclasses.asdict(config))}
@@ -48,7 +53,8 @@ def run_slam_command(log_file, config_path, out_dir, filter_changes: dict | None
     paths = slam_report.write_outputs(out_dir, result, extra)
     truth = sidecars.read_truth(sidecars.truth_path(log_file))[1] if evaluation is not None else None
     world = sidecars.read_map(sidecars.map_path(log_file)) if sidecars.map_path(log_file).exists() else {}
-    points = slam_report.scan_points_world(course_log, result.mean_poses, geometry)
+    points = slam_report.scan_points_world(course_log, result.mean_poses, geometry, config.corners.min_range,
+                                           config.corners.max_range)
     walls = world.get("walls")
     paths["figure"] = slam_report.plot_slam(Path(out_dir) / "slam.png", result, points, truth, walls,
                                             title=f"{Path(log_file).name}: FastSLAM, {config.fastslam.NPARTICLES} particles",

@@ -50,13 +50,15 @@ def evaluate_against_truth(path, course_log: log.CourseLog, result: SlamResult, 
                                            "aligned": map_error(aligned, corners, match_radius)}
 
 
-def scan_points_world(course_log: log.CourseLog, poses: np.ndarray, geometry: BeamGeometry) -> np.ndarray:
-    """Every scan's returns (Q, 2) placed in the world by the given poses (R, 3) of the records."""
+def scan_points_world(course_log: log.CourseLog, poses: np.ndarray, geometry: BeamGeometry,
+                      min_range: float = 0.0, max_range: float = np.inf) -> np.ndarray:
+    """Every scan's returns within [min_range, max_range] (Q, 2), placed in the world by the
+    given poses (R, 3) of the records."""
     bearings = geometry.bearings(course_log.width)
     chunks = []
     for index in np.flatnonzero(course_log.is_scan):
         ranges = course_log.values[index]
-        valid = ranges > 0
+        valid = (ranges > 0) & (ranges >= min_range) & (ranges <= max_range)
         sensor = compose(poses[index], [geometry.mount_x, geometry.mount_y, 0.0])
         chunks.append(transform_points(sensor, polar_to_cartesian(ranges[valid], bearings[valid])))
     return np.concatenate(chunks) if chunks else np.empty((0, 2))

@@ -46,6 +46,8 @@ class CornerParams:
         lines: split-and-merge settings.
         min_range, max_range: ranges used; others count as no return (the exercise trusts only
             part of its camera's range).
+        max_abs_bearing: beams pointing farther than this from straight ahead (degrees, robot
+            frame) count as no return (the exercise uses only the front half: 90).
         min_corner_angle: two neighbouring lines form a corner when they differ by at least this
             much (and at most 180 minus it).
         max_corner_gap: the intersection of two lines must lie within this distance (plus the gap
@@ -61,6 +63,7 @@ class CornerParams:
     lines: LineParams = field(default_factory=LineParams)
     min_range: float = 0.02
     max_range: float = math.inf
+    max_abs_bearing: float = 180.0
     min_corner_angle: float = 30.0
     max_corner_gap: float = 0.03
     max_skipped_points: int = 3
@@ -70,6 +73,7 @@ class CornerParams:
     def __post_init__(self):
         require(0 <= self.min_range < self.max_range,
                 f"corner min_range {self.min_range} must be >= 0 and below max_range {self.max_range}")
+        require(0 < self.max_abs_bearing <= 180, f"max_abs_bearing must be in (0, 180] degrees, got {self.max_abs_bearing}")
         require(0 < self.min_corner_angle <= 90, f"min_corner_angle must be in (0, 90] degrees, got {self.min_corner_angle}")
         require(self.max_corner_gap > 0, f"max_corner_gap must be positive, got {self.max_corner_gap}")
         require(self.max_skipped_points >= 0, f"max_skipped_points must be >= 0, got {self.max_skipped_points}")
@@ -139,6 +143,7 @@ class CornerExtractor:
         self.bearings = geometry.bearings(n_beams)
         self._cos, self._sin = np.cos(self.bearings), np.sin(self.bearings)
         self._indices = np.arange(n_beams)
+        self._bearing_used = np.abs(self.bearings) <= math.radians(self.params.max_abs_bearing) + 1e-12
         self._splitter = SplitAndMerge(self.params.lines)
         lam = math.radians(self.params.lines.breakpoint_angle)
         self._breakpoint_gain = math.sin(self.step) / math.sin(max(lam - self.step, 1e-6))
@@ -151,7 +156,7 @@ class CornerExtractor:
         if ranges.shape != (self.n_beams,):
             raise ValueError(f"expected a scan of {self.n_beams} ranges, got shape {ranges.shape}")
         p = self.params
-        valid = (ranges >= p.min_range) & (ranges <= p.max_range) & (ranges > 0)
+        valid = (ranges >= p.min_range) & (ranges <= p.max_range) & (ranges > 0) & self._bearing_used
         breaks = self._breaks(ranges, valid)
         closed = not breaks.any()
         # Scan order starts just after a break, so that no run wraps around the end. A closed loop
