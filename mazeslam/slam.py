@@ -57,9 +57,13 @@ class SlamResult:
 def run_fastslam(course_log: log.CourseLog, params: FastSLAMParams | None = None,
                  corner_params: CornerParams | None = None, geometry: BeamGeometry = EXERCISE_CONVENTION,
                  start_pose=(0.0, 0.0, 0.0), progress: bool = True, snapshot_every: int = 0,
-                 jump_tolerance: float = math.inf) -> SlamResult:
+                 jump_tolerance: float = math.inf, identify=None) -> SlamResult:
     """FastSLAM over every record of ``course_log``; odometry records travelling more than
-    ``jump_tolerance`` metres are left out (listed in ``SlamResult.dropped_odometry``)."""
+    ``jump_tolerance`` metres are left out (listed in ``SlamResult.dropped_odometry``).
+
+    ``identify(record_index, observations (K, 2)) -> ids (K,)`` names the landmark each scan
+    observation is (for ``association="known"`` on scan logs; landmark records carry their own).
+    """
     params = params or FastSLAMParams()
     slam = FastSLAM(params, start_pose)
     extractor = CornerExtractor(geometry, course_log.width, corner_params) if course_log.n_beams else None
@@ -82,6 +86,8 @@ def run_fastslam(course_log: log.CourseLog, params: FastSLAMParams | None = None
             if isinstance(record, log.ScanRecord):
                 done = [record]
                 z, covariances, ids = _scan_observations(extractor, record)
+                if identify is not None:
+                    ids = identify(record.index, z)
             else:  # landmark observations: all those taken at one time update together
                 done = _same_time_landmarks(records, position)
                 z = np.array([[r.range, r.bearing] for r in done])
@@ -125,8 +131,32 @@ def slam_on_file(path: str | Path, config: SlamConfig | None = None, progress: b
     config = config or SlamConfig()
     course_log = log.read(path)
     geometry, _ = resolve_geometry(path, config.sensor.as_dict())
+    identify = None
+    if config.fastslam.association == "known" and course_log.is_scan.any():
+        identify = truth_identities(path, config.evaluation.match_radius)
     return run_fastslam(course_log, config.fastslam, config.corners, geometry, start_pose(path), progress,
-                        snapshot_every, config.odometry.jump_tolerance)
+                        snapshot_every, config.odometry.jump_tolerance, identify)
+
+
+def truth_identities(path: str | Path, radius: float):
+    """For known association on a simulated log: name each observation by the true corner (map
+    sidecar) within ``radius`` metres of where the true pose (truth sidecar) puts it; -1 if none.
+    A diagnosis tool: it tells association errors apart from everything else."""
+    truth_file, map_file = sidecars.truth_path(path), sidecars.map_path(path)
+    if not (truth_file.exists() and map_file.exists()):
+        raise ValueError(f"{path}: known association on scans needs the truth and map sidecars to name the corners")
+    _, truth = sidecars.read_truth(truth_file)
+    corners = sidecars.read_map(map_file)["corners"]
+
+    def identify(record_index: int, observations: np.ndarray) -> np.ndarray:
+        pose = truth[record_index]
+        angle = pose[2] + observations[:, 1]
+        world = pose[:2] + observations[:, :1] * np.column_stack([np.cos(angle), np.sin(angle)])
+        distance = np.hypot(*(world[:, None, :] - corners[None]).transpose(2, 0, 1))
+        nearest = distance.argmin(axis=1)
+        return np.where(distance[np.arange(len(world)), nearest] <= radius, nearest, -1)
+
+    return identify
 
 
 def start_pose(path: str | Path) -> np.ndarray:

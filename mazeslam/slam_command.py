@@ -9,7 +9,7 @@ from mazeslam import log, sidecars
 from mazeslam.config import jsonable
 from mazeslam.evaluation import slam_report
 from mazeslam.scans import resolve_geometry
-from mazeslam.slam import load_slam_config, run_fastslam, start_pose
+from mazeslam.slam import load_slam_config, slam_on_file, start_pose
 
 
 def run_slam_command(log_file, config_path, out_dir, filter_changes: dict | None = None, geometry_overrides=None,
@@ -20,12 +20,13 @@ def run_slam_command(log_file, config_path, out_dir, filter_changes: dict | None
     changes = {k: v for k, v in (filter_changes or {}).items() if v is not None}
     if changes:
         config = dataclasses.replace(config, fastslam=dataclasses.replace(config.fastslam, **changes))
-    overrides = {**config.sensor.as_dict(), **{k: v for k, v in (geometry_overrides or {}).items() if v is not None}}
+    sensor = {k: v for k, v in (geometry_overrides or {}).items() if v is not None}
+    if sensor:
+        config = dataclasses.replace(config, sensor=dataclasses.replace(config.sensor, **sensor))
     course_log = log.read(log_file)
-    geometry, origin = resolve_geometry(log_file, overrides)
+    geometry, origin = resolve_geometry(log_file, config.sensor.as_dict())
     start = start_pose(log_file)
-    result = run_fastslam(course_log, config.fastslam, config.corners, geometry, start, progress,
-                          snapshot_every=2 if animate else 0, jump_tolerance=config.odometry.jump_tolerance)
+    result = slam_on_file(log_file, config, progress, snapshot_every=2 if animate else 0)
     lines = [f"{log_file}: {len(course_log)} records, {len(result.reports)} observation updates; beam geometry from {origin}",
              f"FastSLAM: {config.fastslam.NPARTICLES} particles, {result.resamplings} resamplings, "
              f"{len(result.landmarks)} landmarks in the best particle's map, "
@@ -36,9 +37,15 @@ def run_slam_command(log_file, config_path, out_dir, filter_changes: dict | None
                      f"{config.odometry.jump_tolerance:g} m in one step (glitches): "
                      + ", ".join(f"line {course_log.line_numbers[r.index]} (t {r.t:.3f} s, dX {r.distance:+.4f} m, "
                                  f"dTheta {r.turn:+.4f} rad)" for r in result.dropped_odometry))
+    checks = slam_report.consistency(result)
+    lines.append(f"Map consistency: {checks['reobserved']} of {checks['landmarks']} landmarks re-observed "
+                 f"(median {checks['median_observations']:.0f} observations each), the nearest two "
+                 f"{checks['nearest_landmarks_m']:.3f} m apart; largest path step between records "
+                 f"{checks['largest_path_step_m']:.3f} m")
     evaluation = slam_report.evaluate_against_truth(log_file, course_log, result, start, match_radius)
     extra = {"source": str(log_file), "beam_geometry": geometry.to_dict(), "start_pose": start.tolist(),
-             "parameters": jsonable(dataclasses.asdict(config))}
+             "parameters": jsonable(dataclasses.asdict(config)), "consistency": checks,
+             "dropped_odometry_lines": [int(course_log.line_numbers[r.index]) for r in result.dropped_odometry]}
     if evaluation is not None:
         table, map_errors = evaluation
         lines += ["Absolute trajectory error against ground truth [m] (aligned: after the best rigid motion):",

@@ -56,3 +56,25 @@ def test_the_sensor_mounting_offset_is_part_of_the_measurement_model(mounted_run
     assert handled["map"]["rmse"] < 0.015
     assert handled["map"]["precision"] > 2 * ignored["map"]["precision"]  # ignoring it smears each corner
     assert handled["slam"] < 0.5 * ignored["slam"]
+
+
+def test_known_association_names_corners_from_the_truth(default_run):
+    config = SlamConfig(fastslam=dataclasses.replace(SlamConfig().fastslam, association="known"))
+    result = slam_on_file(default_run.log_path, config, progress=False)
+    e = errors(default_run, result)
+    assert e["map"]["precision"] == 1.0  # every landmark is a true corner, each mapped once
+    slam = result.filter
+    best = slam.best_particle()
+    identities = slam.ids[best][slam.exists[best]]
+    assert len(set(identities.tolist())) == len(identities) and identities.min() >= 0
+    assert e["slam"] < 0.03
+
+
+def test_known_association_without_truth_is_refused(tmp_path, default_run):
+    import shutil
+
+    copy = tmp_path / "copy.log"
+    shutil.copy(default_run.log_path, copy)
+    config = SlamConfig(fastslam=dataclasses.replace(SlamConfig().fastslam, association="known"))
+    with pytest.raises(ValueError, match="needs the truth and map sidecars"):
+        slam_on_file(copy, config, progress=False)

@@ -50,6 +50,24 @@ def evaluate_against_truth(path, course_log: log.CourseLog, result: SlamResult, 
                                            "aligned": map_error(aligned, corners, match_radius)}
 
 
+def consistency(result: SlamResult) -> dict:
+    """Checks that need no truth: how often the best particle's landmarks were re-observed, how
+    close its two nearest landmarks are (duplicates sit close), the largest jump of the path."""
+    slam = result.filter
+    best = slam.best_particle()
+    seen = slam.seen[best][slam.exists[best]]
+    landmarks = result.landmarks
+    if len(landmarks) > 1:
+        gaps = np.hypot(*(landmarks[:, None, :] - landmarks[None]).transpose(2, 0, 1))
+        nearest = float(gaps[~np.eye(len(landmarks), dtype=bool)].min())
+    else:
+        nearest = float("nan")
+    steps = np.hypot(*np.diff(result.mean_poses[:, :2], axis=0).T) if len(result.mean_poses) > 1 else np.zeros(1)
+    return {"landmarks": len(landmarks), "reobserved": int((seen >= 2).sum()),
+            "median_observations": float(np.median(seen)) if len(seen) else 0.0,
+            "nearest_landmarks_m": nearest, "largest_path_step_m": float(steps.max())}
+
+
 def scan_points_world(course_log: log.CourseLog, poses: np.ndarray, geometry: BeamGeometry,
                       min_range: float = 0.0, max_range: float = np.inf) -> np.ndarray:
     """Every scan's returns within [min_range, max_range] (Q, 2), placed in the world by the

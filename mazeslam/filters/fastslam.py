@@ -189,7 +189,8 @@ class FastSLAM:
         Args:
             observations: (K, 2) range (m) and bearing (rad) in the robot frame.
             covariances: (K, 2, 2) their covariances, or None.
-            ids: (K,) known landmark identities (``association="known"``), else None.
+            ids: (K,) known landmark identities (``association="known"``; -1: none, the observation
+                is left out and counted as ambiguous), else None.
         """
         observations = np.asarray(observations, dtype=float).reshape(-1, 2)
         report = UpdateReport(observations=len(observations))
@@ -346,7 +347,10 @@ class FastSLAM:
             report.matched += len(rows)
         unmatched = slots < 0
         nearest = distance2[:, k].min(axis=1, initial=np.inf)
-        new = unmatched & ((nearest >= self.params.new_landmark_gate) | (self.params.association == "known"))
+        if self.params.association == "known":  # an identity not yet mapped starts a landmark; none (-1): left out
+            new = unmatched & (ids[k] >= 0)
+        else:
+            new = unmatched & (nearest >= self.params.new_landmark_gate)
         report.ambiguous += int((unmatched & ~new).sum())
         if new.any():
             self._add_landmarks(np.flatnonzero(new), observation, noise, None if ids is None else ids[k], matched_now)
