@@ -84,7 +84,13 @@ def _with_overrides(config, rows=None, cols=None, beams=None):
 @main.command()
 @click.argument("log_file", type=click.Path(exists=True, dir_okay=False, path_type=Path))
 @click.option("--lenient", is_flag=True, help="Skip bad lines and report them instead of stopping.")
-def info(log_file, lenient):
+@click.option("--detect-beams", is_flag=True,
+              help="Find the beam convention (first-beam angle, direction) from how consecutive scans agree.")
+@click.option("--config", "config_path", type=click.Path(exists=True, dir_okay=False, path_type=Path),
+              help="With --detect-beams: a slam TOML whose [corners] ranges, [odometry] jump tolerance and "
+                   "[sensor] mount_x to use (e.g. configs/course.toml).")
+@click.option("--mount-x", type=float, help="With --detect-beams: sensor ahead of the wheel axle [m].")
+def info(log_file, lenient, detect_beams, config_path, mount_x):
     """Validate a course log and print a summary: records, duration, beams, odometry travel."""
     course_log = log.read(log_file, strict=not lenient)
     facts = log.summary(course_log)
@@ -103,6 +109,15 @@ def info(log_file, lenient):
         click.echo(f"  skipped line {skipped.line}: {skipped.reason}")
     if course_log.skipped:
         click.echo(f"  {len(course_log.skipped)} line(s) skipped")
+    if detect_beams:
+        from mazeslam.beam_detection import describe, detect_beam_convention
+        from mazeslam.slam import load_slam_config
+
+        config = load_slam_config(config_path)
+        mount = mount_x if mount_x is not None else (config.sensor.mount_x or 0.0)
+        detection = detect_beam_convention(course_log, mount, config.corners.min_range, config.corners.max_range,
+                                           config.odometry.jump_tolerance)
+        click.echo("\n".join(describe(detection)))
 
 
 def _echo_sidecars(log_file: Path) -> None:
@@ -164,6 +179,9 @@ def corners(log_file, scan_number, plot_path, animation_path, json_path, config_
     report = CornerReport.from_log(log_file, config_path, mode,
                                    _geometry_overrides(first_beam_angle, beam_direction, mount_x))
     click.echo(report.summary())
+    warning = report.convention_warning()
+    if warning:
+        click.echo(warning)
     if plot_path:
         click.echo(f"figure: {report.plot(scan_number, plot_path)}")
     if animation_path:

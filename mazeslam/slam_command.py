@@ -6,6 +6,7 @@ import dataclasses
 from pathlib import Path
 
 from mazeslam import log, sidecars
+from mazeslam.beam_detection import convention_warning
 from mazeslam.config import jsonable
 from mazeslam.evaluation import slam_report
 from mazeslam.scans import resolve_geometry
@@ -31,6 +32,11 @@ def run_slam_command(log_file, config_path, out_dir, filter_changes: dict | None
              f"FastSLAM: {config.fastslam.NPARTICLES} particles, {result.resamplings} resamplings, "
              f"{len(result.landmarks)} landmarks in the best particle's map, "
              f"{result.step_seconds.sum():.2f} s ({course_log.duration / max(result.step_seconds.sum(), 1e-9):.0f}x real time)"]
+    if not origin.startswith("sidecar") and course_log.is_scan.sum() > 1:
+        warning = convention_warning(course_log, geometry, config.corners.min_range, config.corners.max_range,
+                                     config.odometry.jump_tolerance)
+        if warning:
+            lines.append(warning)
     match_radius = config.evaluation.match_radius
     if result.dropped_odometry:
         lines.append(f"left out {len(result.dropped_odometry)} odometry records travelling more than "

@@ -111,3 +111,18 @@ def test_corners_on_the_exercise_robot_log(course_log_path, tmp_path):
                     "--first-beam-angle", 0, "--mount-x", 0.11)
     assert result.exit_code == 0, result.output
     assert "overridden by first_beam_angle, mount_x" in result.output
+
+
+def test_info_detects_the_beam_convention_and_slam_warns_about_a_wrong_one(course_log_path, tmp_path):
+    config = PROJECT_ROOT / "configs" / "course.toml"
+    result = invoke("info", course_log_path, "--detect-beams", "--config", config)
+    assert result.exit_code == 0, result.output
+    best = next(line for line in result.output.splitlines() if line.strip().startswith("best"))
+    assert "direction +1" in best and abs(float(best.split("beam 0 at")[1].split("deg")[0])) <= 5
+    result = invoke("slam", course_log_path, "--config", config, "--out", tmp_path / "s", "--quiet")
+    assert "warning: with beam 0 at -180 deg" in result.output
+    assert "left out 5 odometry records" in result.output
+    result = invoke("slam", course_log_path, "--config", config, "--first-beam-angle", 0, "--out", tmp_path / "s",
+                    "--quiet")
+    assert "warning" not in result.output
+    assert (tmp_path / "s" / "slam.png").exists()

@@ -15,6 +15,8 @@ import matplotlib.pyplot as plt  # noqa: E402
 from matplotlib.animation import FuncAnimation, PillowWriter  # noqa: E402
 from tqdm.auto import tqdm  # noqa: E402
 
+from mazeslam import log  # noqa: E402
+from mazeslam.beam_detection import convention_warning  # noqa: E402
 from mazeslam.config import jsonable, load_toml  # noqa: E402
 from mazeslam.evaluation.corner_plots import draw_scan, plot_scan  # noqa: E402
 from mazeslam.filters.corners import CornerExtractor, CornerParams, ScanFeatures  # noqa: E402
@@ -56,6 +58,14 @@ class CornerReport:
             f"  mode             {self.params.mode}",
             f"  per scan         {lines / n:.2f} lines; observations: {per_kind}",
         ])
+
+    def convention_warning(self) -> str | None:
+        """For a course log whose beam geometry is not from a sidecar: a warning when another
+        convention makes its consecutive scans agree clearly better (``mazeslam.beam_detection``)."""
+        if self.scans.geometry_origin.startswith(("sidecar", "CARMEN")) or len(self.features) < 2:
+            return None
+        course_log = log.read(self.scans.source)
+        return convention_warning(course_log, self.scans.geometry, self.params.min_range, self.params.max_range)
 
     def _title(self, index: int) -> str:
         return (f"{Path(self.scans.source).name}: scan {index} (record {self.scans.records[index]}, "
