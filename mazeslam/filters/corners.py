@@ -56,6 +56,9 @@ class CornerParams:
             points that belong to neither (too few for a segment of their own).
         max_end_spacing: a wall end is reported only where neighbouring beams land at most this far
             apart on the wall; at grazing angles the end could lie anywhere in a wider stretch.
+        end_face_std: extra standard deviation (m, in every direction) of a wall end: the end of a
+            wall is a face as wide as the wall is thick, and seen from either side it ends at a
+            different corner of that face (about half the wall thickness; 1 cm walls: 5 mm).
         mode: ``"corners"`` (fixed landmarks only) or ``"endpoints"`` (every segment end point, as
             the exercise's extract_beacon).
     """
@@ -68,6 +71,7 @@ class CornerParams:
     max_corner_gap: float = 0.03
     max_skipped_points: int = 3
     max_end_spacing: float = 0.02
+    end_face_std: float = 0.005
     mode: str = "corners"
 
     def __post_init__(self):
@@ -78,6 +82,7 @@ class CornerParams:
         require(self.max_corner_gap > 0, f"max_corner_gap must be positive, got {self.max_corner_gap}")
         require(self.max_skipped_points >= 0, f"max_skipped_points must be >= 0, got {self.max_skipped_points}")
         require(self.max_end_spacing > 0, f"max_end_spacing must be positive, got {self.max_end_spacing}")
+        require(self.end_face_std >= 0, f"end_face_std must be >= 0, got {self.end_face_std}")
         require(self.mode in ("corners", "endpoints"), f"mode must be 'corners' or 'endpoints', got {self.mode!r}")
 
 
@@ -293,8 +298,10 @@ class CornerExtractor:
         if stretch > self.params.max_end_spacing:
             return None
         point = (distance * ray_x, distance * ray_y)
-        # The wall ends somewhere between the two beams: uniform over that stretch of the line.
-        return point, self._end_covariance(segment, point, along_var=stretch**2 / 12)
+        # The wall ends somewhere between the two beams (uniform over that stretch of the line),
+        # at one corner or the other of its end face.
+        face = self.params.end_face_std**2 * np.eye(2)
+        return point, self._end_covariance(segment, point, along_var=stretch**2 / 12) + face
 
     def _end_covariance(self, segment: LineSegment, point, along_var: float | None = None) -> np.ndarray:
         """Covariance (2, 2) of a point on a segment's line: the fit's offset across it, and along it
