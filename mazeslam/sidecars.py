@@ -66,6 +66,16 @@ def read_truth(path: str | Path) -> tuple[np.ndarray, np.ndarray]:
     return table[:, 0], table[:, 1:]
 
 
+def write_tum(path: str | Path, times: np.ndarray, poses: np.ndarray) -> None:
+    """Write poses (R, 3) as a TUM trajectory: ``t x y z qx qy qz qw`` per line, z = 0, the heading
+    as a rotation about z (for evo and other trajectory tools)."""
+    poses = np.asarray(poses, dtype=float)
+    half = 0.5 * poses[:, 2]
+    zeros = np.zeros(len(poses))
+    table = np.column_stack([times, poses[:, 0], poses[:, 1], zeros, zeros, zeros, np.sin(half), np.cos(half)])
+    np.savetxt(path, table, fmt="%.9f")
+
+
 def write_map(path: str | Path, walls, corners, sensor: dict, **extra) -> None:
     """Write a map sidecar; ``extra`` keys (JSON-serialisable) are stored beside the required ones."""
     document = {

@@ -39,6 +39,7 @@ class SlamResult:
         snapshots: every ``snapshot_every``-th scan: (record index, particle poses (P, 3), best
             particle's landmarks (L, 2)), for animations.
         dropped_odometry: the odometry records left out as glitches (``OdometryRecord``s).
+        pose_covariances: (R, 3, 3) the particle cloud's covariance after each record.
     """
 
     times: np.ndarray
@@ -52,6 +53,7 @@ class SlamResult:
     filter: FastSLAM | None = None
     snapshots: list = field(default_factory=list)
     dropped_odometry: list = field(default_factory=list)
+    pose_covariances: np.ndarray | None = None
 
 
 def run_fastslam(course_log: log.CourseLog, params: FastSLAMParams | None = None,
@@ -69,6 +71,7 @@ def run_fastslam(course_log: log.CourseLog, params: FastSLAMParams | None = None
     extractor = CornerExtractor(geometry, course_log.width, corner_params) if course_log.n_beams else None
     count = len(course_log)
     mean_poses, best_poses, step_seconds = np.empty((count, 3)), np.empty((count, 3)), np.empty(count)
+    pose_covariances = np.empty((count, 3, 3))
     reports, snapshots, dropped = [], [], []
     records = list(course_log.records())
     bar = tqdm(total=count, desc="FastSLAM", unit="record", disable=not progress)
@@ -95,16 +98,17 @@ def run_fastslam(course_log: log.CourseLog, params: FastSLAMParams | None = None
             reports.append(slam.update(z, covariances, ids if params.association == "known" else None))
             if snapshot_every and (len(reports) - 1) % snapshot_every == 0:
                 snapshots.append((record.index, slam.poses.copy(), slam.landmarks()[0]))
-        mean, best = slam.mean_pose(), slam.poses[slam.best_particle()]
+        mean, best, spread = slam.mean_pose(), slam.poses[slam.best_particle()], slam.pose_covariance()
         for finished in done:
             mean_poses[finished.index], best_poses[finished.index] = mean, best
+            pose_covariances[finished.index] = spread
             step_seconds[finished.index] = (time.perf_counter() - started) / len(done)
         position += len(done)
         bar.update(len(done))
     bar.close()
     landmarks, covariances = slam.landmarks()
     return SlamResult(course_log.times, mean_poses, best_poses, landmarks, covariances, step_seconds, reports,
-                      slam.resamplings, slam, snapshots, dropped)
+                      slam.resamplings, slam, snapshots, dropped, pose_covariances)
 
 
 def _scan_observations(extractor: CornerExtractor, record: log.ScanRecord):

@@ -54,8 +54,10 @@ def run_slam_command(log_file, config_path, out_dir, filter_changes: dict | None
              "dropped_odometry_lines": [int(course_log.line_numbers[r.index]) for r in result.dropped_odometry]}
     if evaluation is not None:
         table, map_errors = evaluation
-        lines += ["Absolute trajectory error against ground truth [m] (aligned: after the best rigid motion):",
+        lines += ["Errors against ground truth: ATE [m] (aligned: after the best rigid motion), RPE over "
+                  f"{slam_report.RPE_DISTANCE} m of path [m, rad], NEES of the pose (consistent: 3):",
                   table.to_markdown(floatfmt=".4f")]
+        truth_tum = Path(out_dir) / "truth.tum"
         for name, errors in map_errors.items():
             lines.append(f"Map ({name}): {errors['matched']} landmarks within {match_radius:g} m of a true one, "
                          f"RMSE {errors['rmse']:.4f} m, precision {errors['precision']:.2f}, recall {errors['recall']:.2f}")
@@ -64,6 +66,9 @@ def run_slam_command(log_file, config_path, out_dir, filter_changes: dict | None
     else:
         lines.append("no ground truth beside the log: no errors to report")
     paths = slam_report.write_outputs(out_dir, result, extra)
+    if evaluation is not None:
+        sidecars.write_tum(truth_tum, *sidecars.read_truth(sidecars.truth_path(log_file)))
+        paths["truth_tum"] = truth_tum
     truth = sidecars.read_truth(sidecars.truth_path(log_file))[1] if evaluation is not None else None
     world = sidecars.read_map(sidecars.map_path(log_file)) if sidecars.map_path(log_file).exists() else {}
     points = slam_report.scan_points_world(course_log, result.mean_poses, geometry, config.corners.min_range,

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 from scipy.optimize import linear_sum_assignment
 
-from mazeslam.geometry import wrap_angle
+from mazeslam.geometry import relative, wrap_angle
 
 
 def align_se2(estimate: np.ndarray, truth: np.ndarray) -> np.ndarray:
@@ -57,6 +57,54 @@ def absolute_trajectory_error(estimate: np.ndarray, truth: np.ndarray, align: bo
         "median": float(np.median(errors)),
         "max": float(errors.max()),
     }
+
+
+def relative_pose_error(estimate: np.ndarray, truth: np.ndarray, delta: float, unit: str = "m") -> dict[str, float]:
+    """Relative pose error: how wrong the estimated motion is over stretches of the true path.
+
+    The true path is cut into consecutive stretches of at least ``delta`` metres travelled
+    (``unit="m"``) or ``delta`` records (``unit="records"``), as evo's ``filter_pairs_by_path`` /
+    ``filter_pairs_by_index`` do; for each stretch (i, j) the error is the estimated motion seen
+    from the true one, ``(truth_i^-1 truth_j)^-1 (estimate_i^-1 estimate_j)``. Returns the RMSE,
+    mean and max of its translation (m) and the RMSE of its rotation (rad), and the pair count.
+    """
+    estimate, truth = np.asarray(estimate, dtype=float), np.asarray(truth, dtype=float)
+    if unit == "records":
+        step = int(delta)
+        if step < 1:
+            raise ValueError(f"a record delta must be at least 1, got {delta}")
+        ids = np.arange(0, len(truth), step)
+    elif unit == "m":
+        ids, travelled = [0], 0.0
+        for k in range(1, len(truth)):
+            travelled += float(np.hypot(*(truth[k, :2] - truth[k - 1, :2])))
+            if travelled >= delta:
+                ids.append(k)
+                travelled = 0.0
+        ids = np.array(ids)
+    else:
+        raise ValueError(f"unit must be 'm' or 'records', got {unit!r}")
+    if len(ids) < 2:
+        return {"trans_rmse": float("nan"), "trans_mean": float("nan"), "trans_max": float("nan"),
+                "rot_rmse": float("nan"), "pairs": 0}
+    i, j = ids[:-1], ids[1:]
+    error = relative(relative(truth[i], truth[j]), relative(estimate[i], estimate[j]))
+    translation = np.hypot(error[:, 0], error[:, 1])
+    return {"trans_rmse": float(np.sqrt(np.mean(translation**2))), "trans_mean": float(translation.mean()),
+            "trans_max": float(translation.max()), "rot_rmse": float(np.sqrt(np.mean(error[:, 2] ** 2))),
+            "pairs": int(len(i))}
+
+
+def normalized_estimation_error(estimate: np.ndarray, covariances: np.ndarray, truth: np.ndarray) -> np.ndarray:
+    """NEES per record: e^T C^-1 e for the pose error e (heading wrapped) and the filter's pose
+    covariance C (R, 3, 3). A consistent filter averages 3 (the pose's dimension); records whose
+    covariance is singular give NaN."""
+    error = np.asarray(estimate, dtype=float) - np.asarray(truth, dtype=float)
+    error[:, 2] = wrap_angle(error[:, 2])
+    nees = np.full(len(error), np.nan)
+    regular = np.linalg.det(covariances) > 1e-30
+    nees[regular] = np.einsum("ri,ri->r", error[regular], np.linalg.solve(covariances[regular], error[regular][..., None])[..., 0])
+    return nees
 
 
 def map_error(landmarks: np.ndarray, true_landmarks: np.ndarray, match_radius: float = 0.05) -> dict[str, float]:

@@ -16,20 +16,29 @@ from matplotlib.patches import Ellipse  # noqa: E402
 
 from mazeslam import log, sidecars  # noqa: E402
 from mazeslam.beams import BeamGeometry  # noqa: E402
-from mazeslam.evaluation.metrics import absolute_trajectory_error, align_se2, apply_se2, map_error  # noqa: E402
+from mazeslam.evaluation.metrics import (  # noqa: E402
+    absolute_trajectory_error, align_se2, apply_se2, map_error, normalized_estimation_error, relative_pose_error,
+)
 from mazeslam.filters.motion import dead_reckoning  # noqa: E402
 from mazeslam.geometry import compose, polar_to_cartesian, transform_points  # noqa: E402
 from mazeslam.slam import SlamResult  # noqa: E402
 
 
+#: Stretch of the true path over which the relative pose error is measured, metres.
+RPE_DISTANCE = 0.1
+
+
 def error_table(estimates: dict[str, np.ndarray], truth: np.ndarray) -> pd.DataFrame:
-    """ATE (RMSE, mean, max; without and with SE(2) alignment) of each named trajectory, metres."""
+    """ATE (RMSE, mean, max; without and with SE(2) alignment, metres) and RPE over
+    ``RPE_DISTANCE`` of path (translation m, rotation rad) of each named trajectory."""
     rows = []
     for name, poses in estimates.items():
         raw = absolute_trajectory_error(poses, truth)
         aligned = absolute_trajectory_error(poses, truth, align=True)
+        rpe = relative_pose_error(poses, truth, RPE_DISTANCE)
         rows.append({"estimator": name, "ate_rmse": raw["rmse"], "ate_mean": raw["mean"], "ate_max": raw["max"],
-                     "aligned_rmse": aligned["rmse"], "aligned_mean": aligned["mean"], "aligned_max": aligned["max"]})
+                     "aligned_rmse": aligned["rmse"], "aligned_mean": aligned["mean"], "aligned_max": aligned["max"],
+                     "rpe_trans_rmse": rpe["trans_rmse"], "rpe_rot_rmse": rpe["rot_rmse"]})
     return pd.DataFrame(rows).set_index("estimator")
 
 
@@ -46,8 +55,12 @@ def evaluate_against_truth(path, course_log: log.CourseLog, result: SlamResult, 
                  "FastSLAM (best particle)": result.best_poses}
     corners = sidecars.read_map(map_file)["corners"] if map_file.exists() else np.empty((0, 2))
     aligned = apply_se2(align_se2(result.mean_poses, truth), result.landmarks) if len(result.landmarks) else result.landmarks
-    return error_table(estimates, truth), {"as estimated": map_error(result.landmarks, corners, match_radius),
-                                           "aligned": map_error(aligned, corners, match_radius)}
+    table = error_table(estimates, truth)
+    table["mean_nees"] = np.nan
+    for name, covariances in (("FastSLAM (mean)", result.pose_covariances),):
+        table.loc[name, "mean_nees"] = float(np.nanmean(normalized_estimation_error(result.mean_poses, covariances, truth)))
+    return table, {"as estimated": map_error(result.landmarks, corners, match_radius),
+                   "aligned": map_error(aligned, corners, match_radius)}
 
 
 def consistency(result: SlamResult) -> dict:
@@ -158,13 +171,15 @@ def animate_slam(path, result: SlamResult, points: np.ndarray, truth: np.ndarray
 
 
 def write_outputs(out_dir, result: SlamResult, extra: dict) -> dict[str, Path]:
-    """``trajectory.csv`` (t,x,y,theta: weighted mean at every record), ``best_trajectory.csv``
-    (most probable particle) and ``map.json`` (best particle's landmarks with covariances, run facts)."""
+    """``trajectory.csv`` (t,x,y,theta: weighted mean at every record), the same as
+    ``trajectory.tum`` (for evo), ``best_trajectory.csv`` (most probable particle) and ``map.json``
+    (best particle's landmarks with covariances, run facts)."""
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
     paths = {"trajectory": out_dir / "trajectory.csv", "best_trajectory": out_dir / "best_trajectory.csv",
-             "map": out_dir / "map.json"}
+             "map": out_dir / "map.json", "tum": out_dir / "trajectory.tum"}
     sidecars.write_truth(paths["trajectory"], result.times, result.mean_poses)
+    sidecars.write_tum(paths["tum"], result.times, result.mean_poses)
     sidecars.write_truth(paths["best_trajectory"], result.times, result.best_poses)
     scan_seconds = np.array([s for s in result.step_seconds])
     document = {

@@ -428,6 +428,15 @@ class FastSLAM:
         theta = math.atan2(w @ np.sin(self.poses[:, 2]), w @ np.cos(self.poses[:, 2]))
         return np.array([x, y, theta])
 
+    def pose_covariance(self) -> np.ndarray:
+        """Covariance (3, 3) of the weighted particle cloud around ``mean_pose`` (heading
+        differences wrapped); FastSLAM 2.0 adds the motion uncertainty not yet drawn."""
+        w = self.weights()
+        deviation = self.poses - self.mean_pose()
+        deviation[:, 2] = wrap_angle(deviation[:, 2])
+        covariance = np.einsum("p,pi,pj->ij", w, deviation, deviation)
+        return covariance + np.einsum("p,pij->ij", w, self.pose_covariances)
+
     def best_particle(self) -> int:
         return int(np.argmax(self.log_weights))
 
