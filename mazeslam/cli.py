@@ -217,6 +217,35 @@ def slam(log_file, particles, config_path, out_dir, seed, association, version, 
     click.echo("\n".join(lines))
 
 
+@main.command()
+@click.argument("sweep_file", type=click.Path(exists=True, dir_okay=False, path_type=Path))
+@click.option("--out", "out_dir", type=click.Path(file_okay=False, path_type=Path), required=True,
+              help="Results folder; runs already in it are not run again (resume).")
+@click.option("--workers", type=click.IntRange(min=1), help="Local worker processes [default: one per core].")
+@click.option("--scheduler", help="Run on the Dask cluster at this address instead, e.g. tcp://host:8786.")
+@click.option("--quiet", is_flag=True, help="No progress bar.")
+def sweep(sweep_file, out_dir, workers, scheduler, quiet):
+    """Run a grid of simulator and filter settings over seeds; write one table and its summary."""
+    from mazeslam.evaluation.sweep import load_sweep, run_sweep
+    from mazeslam.evaluation.sweep_report import make_report
+
+    definition = load_sweep(sweep_file)
+    result = run_sweep(definition, out_dir, workers, scheduler, progress=not quiet)
+    click.echo(f"{definition.name}: {len(result.table)} runs ({result.ran} run now in {result.seconds:.1f} s, "
+               f"{result.reused} already in {out_dir})")
+    click.echo((out_dir / "summary.md").read_text())
+    click.echo("wrote " + ", ".join(str(p) for p in [*result.paths.values(), *make_report(out_dir)[1:]]))
+
+
+@main.command()
+@click.argument("out_dir", type=click.Path(exists=True, file_okay=False, path_type=Path))
+def report(out_dir):
+    """Turn a sweep's results folder into Markdown tables and plots."""
+    from mazeslam.evaluation.sweep_report import make_report
+
+    click.echo("wrote " + ", ".join(str(p) for p in make_report(out_dir)))
+
+
 @main.group(name="import")
 def import_group():
     """Turn other datasets into course logs with truth and map sidecars."""

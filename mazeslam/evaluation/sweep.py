@@ -1,0 +1,315 @@
+"""Parameter sweeps: a TOML grid of simulator and filter settings times seeds, run in parallel,
+one tidy table out, resumable.
+
+A sweep file::
+
+    name = "particles"
+    seeds = [0, 1, 2]
+    maze = "random"                          # or a maze file
+    simulation_config = "configs/simulation.toml"   # optional base settings
+    slam_config = "configs/fastslam.toml"           # optional base settings
+
+    [grid]
+    "slam.fastslam.NPARTICLES" = [5, 100, 1000]
+    "sim.laser.range_noise_std" = [0.001, 0.003]
+
+Grid keys name a setting by its place: ``sim.<section>.<name>`` in the simulator's config
+(sections robot, laser, odometry, logger, drive, maze), ``slam.<section>.<name>`` in the slam
+config (fastslam, corners, corners.lines, sensor, odometry, evaluation). Every combination of
+the grid's values runs once per seed: simulate (seeded), then FastSLAM (seeded alike), then the
+metrics against the truth. Each finished run is appended at once to ``runs.jsonl`` in the output
+folder, so an interrupted sweep resumes where it stopped; the same seeds give the same table.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import hashlib
+import itertools
+import json
+import math
+import tempfile
+import time
+import tomllib
+from concurrent.futures import ProcessPoolExecutor, as_completed
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+from tqdm.auto import tqdm
+
+from mazeslam import log, sidecars
+from mazeslam.config import ConfigError
+from mazeslam.envs.simulator import SimulationConfig, load_config, simulate
+from mazeslam.evaluation.metrics import (
+    absolute_trajectory_error, align_se2, apply_se2, map_error, normalized_estimation_error, relative_pose_error,
+)
+from mazeslam.filters.motion import dead_reckoning
+from mazeslam.slam import SlamConfig, load_slam_config, slam_on_file
+
+RESULTS = "runs.jsonl"
+MAPS = "maps"
+
+
+@dataclass(frozen=True)
+class Sweep:
+    """A parsed sweep file: the grid, the seeds and the base settings (paths relative to the file)."""
+
+    name: str
+    grid: dict[str, list]
+    seeds: list[int]
+    maze: str = "random"
+    simulation_config: str | None = None
+    slam_config: str | None = None
+    duration: float | None = None
+    source: str = "<memory>"
+
+    def runs(self) -> list[dict]:
+        """Every run: ``{"settings": {key: value}, "seed": s}`` in a stable order."""
+        keys = list(self.grid)
+        combos = itertools.product(*(self.grid[k] for k in keys))
+        return [{"settings": dict(zip(keys, values)), "seed": seed} for values in combos for seed in self.seeds]
+
+    def base_simulation(self) -> SimulationConfig:
+        return load_config(self.simulation_config)
+
+    def base_slam(self) -> SlamConfig:
+        return load_slam_config(self.slam_config)
+
+
+def load_sweep(path: str | Path) -> Sweep:
+    """Read and check a sweep file; every grid key must name an existing setting."""
+    path = Path(path)
+    try:
+        document = tomllib.loads(path.read_text())
+    except FileNotFoundError as error:
+        raise ConfigError(f"{path}: sweep file not found") from error
+    except tomllib.TOMLDecodeError as error:
+        raise ConfigError(f"{path}: not valid TOML: {error}") from error
+    known = {"name", "seeds", "maze", "simulation_config", "slam_config", "duration", "grid"}
+    unknown = sorted(set(document) - known)
+    if unknown:
+        raise ConfigError(f"{path}: unknown key(s) {', '.join(unknown)}; known: {', '.join(sorted(known))}")
+    grid = document.get("grid", {})
+    if not isinstance(grid, dict) or not all(isinstance(v, list) and v for v in grid.values()):
+        raise ConfigError(f"{path}: [grid] must map setting names to non-empty lists of values")
+    seeds = document.get("seeds", [0])
+    if not isinstance(seeds, list) or not seeds or not all(isinstance(s, int) for s in seeds):
+        raise ConfigError(f"{path}: seeds must be a non-empty list of integers")
+    base = path.parent
+
+    def resolve(name):
+        value = document.get(name)
+        if value is None:
+            return None
+        candidate = Path(value)
+        return str(candidate if candidate.is_absolute() or candidate.exists() else base / candidate)
+
+    maze = document.get("maze", "random")
+    sweep = Sweep(name=document.get("name", path.stem), grid=grid, seeds=seeds,
+                  maze=maze if maze == "random" else resolve("maze"),
+                  simulation_config=resolve("simulation_config"), slam_config=resolve("slam_config"),
+                  duration=document.get("duration"), source=str(path))
+    for run in sweep.runs()[: max(1, len(sweep.seeds))]:
+        try:
+            configure(sweep, run["settings"])
+        except (ConfigError, ValueError, TypeError) as error:
+            raise ConfigError(f"{path}: {error}") from error
+    return sweep
+
+
+def configure(sweep: Sweep, settings: dict) -> tuple[SimulationConfig, SlamConfig]:
+    """The simulator and slam configs of one grid cell."""
+    simulation, slam = sweep.base_simulation(), sweep.base_slam()
+    for key, value in settings.items():
+        scope, _, place = key.partition(".")
+        if scope == "sim":
+            simulation = replace_setting(simulation, place, value)
+        elif scope == "slam":
+            slam = replace_setting(slam, place, value)
+        else:
+            raise ConfigError(f"grid key {key!r} must start with 'sim.' or 'slam.'")
+    return simulation, slam
+
+
+def replace_setting(config, place: str, value):
+    """``config`` with the (possibly nested, dot-separated) setting ``place`` set to ``value``."""
+    head, _, rest = place.partition(".")
+    names = {f.name for f in dataclasses.fields(config)}
+    if head not in names:
+        raise ConfigError(f"no setting {head!r} in {type(config).__name__} (known: {', '.join(sorted(names))})")
+    if rest:
+        return dataclasses.replace(config, **{head: replace_setting(getattr(config, head), rest, value)})
+    return dataclasses.replace(config, **{head: value})
+
+
+def run_id(sweep: Sweep, run: dict) -> str:
+    """A stable name for one run: a hash of its settings, seed and the sweep's base settings."""
+    identity = {"settings": run["settings"], "seed": run["seed"], "maze": sweep.maze, "duration": sweep.duration,
+                "simulation": dataclasses.asdict(sweep.base_simulation()), "slam": dataclasses.asdict(sweep.base_slam())}
+    text = json.dumps(identity, sort_keys=True, default=str)
+    return hashlib.sha1(text.encode()).hexdigest()[:16]
+
+
+def execute_run(sweep: Sweep, run: dict, maps_folder: str | None = None) -> dict:
+    """Simulate, map and score one run; returns its row (settings, seed, metrics). Runs in a worker."""
+    simulation_config, slam_config = configure(sweep, run["settings"])
+    seed = run["seed"]
+    slam_config = dataclasses.replace(slam_config, fastslam=dataclasses.replace(slam_config.fastslam, seed=seed))
+    with tempfile.TemporaryDirectory() as folder:
+        simulated = simulate(Path(folder) / "run.log", simulation_config, sweep.maze, seed, sweep.duration,
+                             progress=False)
+        started = time.perf_counter()
+        result = slam_on_file(simulated.log_path, slam_config, progress=False)
+        seconds = time.perf_counter() - started
+        course_log = log.read(simulated.log_path)
+        world = sidecars.read_map(simulated.map_path)
+    truth = simulated.poses
+    reckoned = dead_reckoning(course_log, world["start_pose"])
+    alignment = align_se2(result.mean_poses, truth)
+    aligned_map = apply_se2(alignment, result.landmarks) if len(result.landmarks) else result.landmarks
+    raw_map = map_error(result.landmarks, world["corners"], slam_config.evaluation.match_radius)
+    aligned_map_error = map_error(aligned_map, world["corners"], slam_config.evaluation.match_radius)
+    row = {
+        "run_id": run_id(sweep, run), "seed": seed, **run["settings"],
+        "ate_rmse": absolute_trajectory_error(result.mean_poses, truth)["rmse"],
+        "ate_aligned_rmse": absolute_trajectory_error(result.mean_poses, truth, align=True)["rmse"],
+        "reckoning_ate_rmse": absolute_trajectory_error(reckoned, truth)["rmse"],
+        "reckoning_ate_aligned_rmse": absolute_trajectory_error(reckoned, truth, align=True)["rmse"],
+        "rpe_trans_rmse": relative_pose_error(result.mean_poses, truth, 0.1)["trans_rmse"],
+        "rpe_rot_rmse": relative_pose_error(result.mean_poses, truth, 0.1)["rot_rmse"],
+        "map_rmse": raw_map["rmse"], "map_aligned_rmse": aligned_map_error["rmse"],
+        "map_precision": aligned_map_error["precision"], "map_recall": aligned_map_error["recall"],
+        "landmarks": len(result.landmarks),
+        "median_nees": float(np.nanmedian(normalized_estimation_error(result.mean_poses, result.pose_covariances, truth))),
+        "resamplings": result.resamplings, "scans": len(result.reports),
+        "slam_seconds": seconds, "log_seconds": course_log.duration,
+        "seconds_per_record": seconds / len(course_log),
+    }
+    if maps_folder is not None:
+        Path(maps_folder, f"{row['run_id']}.json").write_text(json.dumps({
+            "landmarks": aligned_map.tolist(), "walls": world["walls"].tolist(), "corners": world["corners"].tolist(),
+            "trajectory": apply_se2(alignment, result.mean_poses)[:, :2].round(5).tolist(),
+            "truth": truth[:, :2].round(5).tolist()}))
+    return row
+
+
+def finished_runs(out_dir: Path) -> dict[str, dict]:
+    """The rows already in ``runs.jsonl`` by run id (a line cut off by a crash is ignored)."""
+    path = out_dir / RESULTS
+    rows = {}
+    if path.exists():
+        for line in path.read_text().splitlines():
+            try:
+                row = json.loads(line)
+            except json.JSONDecodeError:
+                continue
+            rows[row["run_id"]] = row
+    return rows
+
+
+@dataclass
+class SweepReport:
+    """What ``run_sweep`` did."""
+
+    table: pd.DataFrame
+    ran: int
+    reused: int
+    seconds: float
+    paths: dict = field(default_factory=dict)
+
+
+def run_sweep(sweep: Sweep, out_dir: str | Path, workers: int | None = None, scheduler: str | None = None,
+              progress: bool = True) -> SweepReport:
+    """Run every run of ``sweep`` not yet in ``out_dir``, in parallel, and write the tables.
+
+    ``workers`` local processes (default: one per core), or the Dask cluster at ``scheduler``
+    (e.g. ``tcp://host:8786``). Returns the whole table (old and new rows).
+    """
+    out_dir = Path(out_dir)
+    (out_dir / MAPS).mkdir(parents=True, exist_ok=True)
+    (out_dir / "sweep.json").write_text(json.dumps({"name": sweep.name, "source": sweep.source, "grid": sweep.grid,
+                                                    "seeds": sweep.seeds}, indent=1) + "\n")
+    done = finished_runs(out_dir)
+    pending = [run for run in sweep.runs() if run_id(sweep, run) not in done]
+    started = time.perf_counter()
+    bar = tqdm(total=len(done) + len(pending), initial=len(done), desc=f"sweep {sweep.name}", unit="run",
+               disable=not progress)
+    with (out_dir / RESULTS).open("a") as results:
+        for row in _execute(sweep, pending, str(out_dir / MAPS), workers, scheduler):
+            results.write(json.dumps(row) + "\n")
+            results.flush()
+            done[row["run_id"]] = row
+            bar.update(1)
+    bar.close()
+    order = {run_id(sweep, run): k for k, run in enumerate(sweep.runs())}
+    table = pd.DataFrame(sorted((r for r in done.values() if r["run_id"] in order), key=lambda r: order[r["run_id"]]))
+    paths = write_tables(table, list(sweep.grid), out_dir)
+    return SweepReport(table, len(pending), len(sweep.runs()) - len(pending), time.perf_counter() - started, paths)
+
+
+def _execute(sweep: Sweep, runs: list[dict], maps_folder: str, workers: int | None, scheduler: str | None):
+    """Yield rows as runs finish, on local processes or a Dask cluster."""
+    if not runs:
+        return
+    if scheduler:
+        from distributed import Client, as_completed as dask_completed
+
+        with Client(scheduler) as client:
+            futures = [client.submit(execute_run, sweep, run, maps_folder, pure=False) for run in runs]
+            for future in dask_completed(futures):
+                yield future.result()
+        return
+    if workers == 1:
+        for run in runs:
+            yield execute_run(sweep, run, maps_folder)
+        return
+    with ProcessPoolExecutor(max_workers=workers) as pool:
+        futures = [pool.submit(execute_run, sweep, run, maps_folder) for run in runs]
+        for future in as_completed(futures):
+            yield future.result()
+
+
+METRICS = ["ate_rmse", "ate_aligned_rmse", "reckoning_ate_rmse", "map_aligned_rmse", "rpe_trans_rmse",
+           "median_nees", "landmarks", "slam_seconds", "seconds_per_record"]
+
+
+def summarise(table: pd.DataFrame, grid_keys: list[str], metrics: list[str] = METRICS) -> pd.DataFrame:
+    """Mean and 95 % confidence half-width (Student's t over the seeds) of each metric per grid cell."""
+    from scipy import stats
+
+    groups = table.groupby(grid_keys, dropna=False) if grid_keys else [((), table)]
+    rows = []
+    for key, group in groups:
+        key = key if isinstance(key, tuple) else (key,)
+        row = dict(zip(grid_keys, key))
+        row["runs"] = len(group)
+        for metric in metrics:
+            values = group[metric].dropna().to_numpy(dtype=float)
+            mean = values.mean() if len(values) else math.nan
+            half = (stats.t.ppf(0.975, len(values) - 1) * values.std(ddof=1) / math.sqrt(len(values))
+                    if len(values) > 1 else math.nan)
+            row[metric], row[f"{metric}_ci95"] = mean, half
+        rows.append(row)
+    return pd.DataFrame(rows)
+
+
+def write_tables(table: pd.DataFrame, grid_keys: list[str], out_dir: Path) -> dict[str, Path]:
+    """``results.csv`` and ``results.parquet`` (one row per run) and ``summary.md`` (mean +- 95 % CI per cell)."""
+    paths = {"csv": out_dir / "results.csv", "parquet": out_dir / "results.parquet", "summary": out_dir / "summary.md"}
+    table.to_csv(paths["csv"], index=False)
+    table.to_parquet(paths["parquet"], index=False)
+    paths["summary"].write_text(summary_markdown(table, grid_keys))
+    return paths
+
+
+def summary_markdown(table: pd.DataFrame, grid_keys: list[str]) -> str:
+    summary = summarise(table, grid_keys)
+    shown = summary[grid_keys + ["runs"]].copy()
+    for metric in METRICS:
+        unit = " [m]" if metric.endswith("rmse") else " [s]" if "seconds" in metric else ""
+        shown[metric + unit] = [f"{m:.4g} ± {h:.2g}" if not math.isnan(h) else f"{m:.4g}"
+                                for m, h in zip(summary[metric], summary[f"{metric}_ci95"])]
+    return ("Mean ± 95 % confidence half-width over the seeds, per grid cell.\n\n"
+            + shown.to_markdown(index=False) + "\n")

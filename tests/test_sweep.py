@@ -1,0 +1,93 @@
+"""Sweeps: grid expansion, resuming after a kill, the same seeds giving the same table, Dask."""
+
+import json
+import signal
+import subprocess
+import sys
+import time
+
+import pandas as pd
+import pytest
+
+from mazeslam.config import ConfigError
+from mazeslam.evaluation.sweep import RESULTS, load_sweep, run_sweep, summarise
+
+TIMING = ["slam_seconds", "seconds_per_record"]
+
+
+def write_sweep(folder, seeds=(0, 1), particles=(5, 20), duration=12.0, extra=""):
+    path = folder / "s.toml"
+    path.write_text(f'name = "t"\nseeds = {list(seeds)}\nduration = {duration}\n{extra}\n[grid]\n'
+                    f'"slam.fastslam.NPARTICLES" = {list(particles)}\n"sim.laser.beams" = [90]\n')
+    return path
+
+
+def test_grid_expands_over_every_combination_and_seed(tmp_path):
+    sweep = load_sweep(write_sweep(tmp_path, seeds=(0, 1, 2), particles=(5, 20)))
+    runs = sweep.runs()
+    assert len(runs) == 6
+    assert {r["settings"]["slam.fastslam.NPARTICLES"] for r in runs} == {5, 20}
+
+
+@pytest.mark.parametrize("grid_line, message", [
+    ('"slam.fastslam.particles" = [5]', "no setting 'particles'"),
+    ('"filter.NPARTICLES" = [5]', "must start with 'sim.' or 'slam.'"),
+    ('"sim.laser.beams" = 90', "non-empty lists"),
+])
+def test_bad_sweep_files_are_refused(tmp_path, grid_line, message):
+    path = tmp_path / "bad.toml"
+    path.write_text(f"seeds = [0]\n[grid]\n{grid_line}\n")
+    with pytest.raises(ConfigError, match=message):
+        load_sweep(path)
+
+
+def test_same_seeds_same_table_in_parallel_or_not(tmp_path):
+    sweep = load_sweep(write_sweep(tmp_path))
+    serial = run_sweep(sweep, tmp_path / "a", workers=1, progress=False).table.drop(columns=TIMING)
+    parallel = run_sweep(sweep, tmp_path / "b", workers=2, progress=False).table.drop(columns=TIMING)
+    pd.testing.assert_frame_equal(serial, parallel)
+    assert (tmp_path / "a" / "results.parquet").exists() and (tmp_path / "a" / "summary.md").exists()
+    summary = summarise(serial.assign(slam_seconds=0.0, seconds_per_record=0.0), ["slam.fastslam.NPARTICLES"])
+    assert list(summary["runs"]) == [2, 2]
+
+
+def test_resume_reuses_finished_runs_and_ignores_a_torn_line(tmp_path):
+    sweep = load_sweep(write_sweep(tmp_path))
+    first = run_sweep(sweep, tmp_path / "out", workers=1, progress=False)
+    assert (first.ran, first.reused) == (4, 0)
+    lines = (tmp_path / "out" / RESULTS).read_text().splitlines()
+    (tmp_path / "out" / RESULTS).write_text("\n".join(lines[:2]) + "\n" + lines[2][:40])  # a crash mid-write
+    second = run_sweep(sweep, tmp_path / "out", workers=1, progress=False)
+    assert (second.ran, second.reused) == (2, 2)
+    pd.testing.assert_frame_equal(first.table.drop(columns=TIMING), second.table.drop(columns=TIMING))
+
+
+def test_a_killed_sweep_resumes_with_nothing_lost(tmp_path):
+    path = write_sweep(tmp_path, seeds=(0, 1, 2), particles=(5, 20, 40), duration=20.0)
+    out = tmp_path / "out"
+    command = [sys.executable, "-m", "mazeslam.cli", "sweep", str(path), "--out", str(out), "--workers", "1", "--quiet"]
+    process = subprocess.Popen(command, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    deadline = time.time() + 120
+    while time.time() < deadline:
+        results = out / RESULTS
+        if results.exists() and len(results.read_text().splitlines()) >= 2:
+            break
+        time.sleep(0.1)
+    process.send_signal(signal.SIGKILL)
+    process.wait()
+    before = [json.loads(line)["run_id"] for line in (out / RESULTS).read_text().splitlines() if line.endswith("}")]
+    assert 2 <= len(before) < 9
+    done = subprocess.run(command, capture_output=True, text=True, timeout=300)
+    assert done.returncode == 0, done.stderr
+    assert f"{9 - len(before)} run now" in done.stdout and f"{len(before)} already" in done.stdout
+    table = pd.read_csv(out / "results.csv")
+    assert len(table) == 9 and table.run_id.is_unique and set(before) <= set(table.run_id)
+
+
+def test_runs_on_a_dask_cluster_with_the_same_results(tmp_path):
+    distributed = pytest.importorskip("distributed")
+    sweep = load_sweep(write_sweep(tmp_path, seeds=(0,), particles=(5, 20)))
+    local = run_sweep(sweep, tmp_path / "local", workers=1, progress=False).table.drop(columns=TIMING)
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None) as cluster:
+        remote = run_sweep(sweep, tmp_path / "dask", scheduler=cluster.scheduler_address, progress=False)
+    pd.testing.assert_frame_equal(local, remote.table.drop(columns=TIMING))
