@@ -91,3 +91,19 @@ def test_runs_on_a_dask_cluster_with_the_same_results(tmp_path):
     with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None) as cluster:
         remote = run_sweep(sweep, tmp_path / "dask", scheduler=cluster.scheduler_address, progress=False)
     pd.testing.assert_frame_equal(local, remote.table.drop(columns=TIMING))
+
+
+def test_linked_settings_move_together(tmp_path):
+    path = tmp_path / "linked.toml"
+    path.write_text('seeds = [0]\nduration = 10.0\n[grid]\n'
+                    '"slam.fastslam.sigmaR+slam.fastslam.sigmaB" = [[0.002, 0.01], [0.02, 0.1]]\n')
+    sweep = load_sweep(path)
+    from mazeslam.evaluation.sweep import configure
+
+    _, slam = configure(sweep, sweep.runs()[1]["settings"])
+    assert (slam.fastslam.sigmaR, slam.fastslam.sigmaB) == (0.02, 0.1)
+    table = run_sweep(sweep, tmp_path / "out", workers=1, progress=False).table
+    assert list(table["slam.fastslam.sigmaR+slam.fastslam.sigmaB"]) == ["0.002/0.01", "0.02/0.1"]
+    path.write_text('seeds = [0]\n[grid]\n"slam.fastslam.sigmaR+slam.fastslam.sigmaB" = [[0.002]]\n')
+    with pytest.raises(ConfigError, match="needs lists of 2 values"):
+        load_sweep(path)

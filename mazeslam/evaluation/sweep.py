@@ -15,7 +15,12 @@ A sweep file::
 
 Grid keys name a setting by its place: ``sim.<section>.<name>`` in the simulator's config
 (sections robot, laser, odometry, logger, drive, maze), ``slam.<section>.<name>`` in the slam
-config (fastslam, corners, corners.lines, sensor, odometry, evaluation). Every combination of
+config (fastslam, corners, corners.lines, sensor, odometry, evaluation). Settings that move
+together are linked with ``+`` and take lists of values, one per setting::
+
+    "slam.fastslam.sigmaR+slam.fastslam.sigmaB" = [[0.001, 0.006], [0.003, 0.017], [0.01, 0.05]]
+
+(in the table such a cell's value is written ``0.001/0.006``). Every combination of
 the grid's values runs once per seed: simulate (seeded), then FastSLAM (seeded alike), then the
 metrics against the truth. Each finished run is appended at once to ``runs.jsonl`` in the output
 folder, so an interrupted sweep resumes where it stopped; the same seeds give the same table.
@@ -122,7 +127,7 @@ def load_sweep(path: str | Path) -> Sweep:
 def configure(sweep: Sweep, settings: dict) -> tuple[SimulationConfig, SlamConfig]:
     """The simulator and slam configs of one grid cell."""
     simulation, slam = sweep.base_simulation(), sweep.base_slam()
-    for key, value in settings.items():
+    for key, value in _unlinked(settings):
         scope, _, place = key.partition(".")
         if scope == "sim":
             simulation = replace_setting(simulation, place, value)
@@ -131,6 +136,23 @@ def configure(sweep: Sweep, settings: dict) -> tuple[SimulationConfig, SlamConfi
         else:
             raise ConfigError(f"grid key {key!r} must start with 'sim.' or 'slam.'")
     return simulation, slam
+
+
+def _unlinked(settings: dict):
+    """(key, value) for every single setting, linked keys (``a+b``) split into their parts."""
+    for key, value in settings.items():
+        keys = key.split("+")
+        if len(keys) == 1:
+            yield key, value
+            continue
+        if not isinstance(value, list) or len(value) != len(keys):
+            raise ConfigError(f"linked grid key {key!r} needs lists of {len(keys)} values, got {value!r}")
+        yield from zip(keys, value)
+
+
+def cell_label(value) -> object:
+    """A grid value as it goes into the table: linked values joined by '/'."""
+    return "/".join(f"{v:g}" if isinstance(v, float) else str(v) for v in value) if isinstance(value, list) else value
 
 
 def replace_setting(config, place: str, value):
@@ -172,7 +194,7 @@ def execute_run(sweep: Sweep, run: dict, maps_folder: str | None = None) -> dict
     raw_map = map_error(result.landmarks, world["corners"], slam_config.evaluation.match_radius)
     aligned_map_error = map_error(aligned_map, world["corners"], slam_config.evaluation.match_radius)
     row = {
-        "run_id": run_id(sweep, run), "seed": seed, **run["settings"],
+        "run_id": run_id(sweep, run), "seed": seed, **{k: cell_label(v) for k, v in run["settings"].items()},
         "ate_rmse": absolute_trajectory_error(result.mean_poses, truth)["rmse"],
         "ate_aligned_rmse": absolute_trajectory_error(result.mean_poses, truth, align=True)["rmse"],
         "reckoning_ate_rmse": absolute_trajectory_error(reckoned, truth)["rmse"],

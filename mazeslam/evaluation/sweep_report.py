@@ -18,6 +18,11 @@ PLOTTED = [("ate_rmse", "ATE RMSE [m]"), ("ate_aligned_rmse", "ATE RMSE, aligned
            ("map_aligned_rmse", "map RMSE, aligned [m]"), ("slam_seconds", "FastSLAM run time [s]")]
 
 
+def short_name(key: str) -> str:
+    """A grid key without its place: ``slam.fastslam.sigmaR+slam.fastslam.sigmaB`` -> ``sigmaR+sigmaB``."""
+    return "+".join(part.split(".")[-1] for part in key.split("+"))
+
+
 def make_report(out_dir: str | Path) -> list[Path]:
     """Write summary.md, one plot per grid setting and the maps side by side; return the files."""
     out_dir = Path(out_dir)
@@ -42,7 +47,7 @@ def _plot_against(table: pd.DataFrame, key: str, others: list[str], out_dir: Pat
     numeric = pd.api.types.is_numeric_dtype(summary[key])
     for label, group in groups:
         group = group.sort_values(key)
-        name = ", ".join(f"{o.split('.')[-1]}={v}" for o, v in zip(others, label if isinstance(label, tuple) else (label,)))
+        name = ", ".join(f"{short_name(o)}={v}" for o, v in zip(others, label if isinstance(label, tuple) else (label,)))
         for ax, (metric, title) in zip(axes, PLOTTED):
             x = group[key] if numeric else group[key].astype(str)
             ax.errorbar(x, group[metric], yerr=group[f"{metric}_ci95"].fillna(0), marker="o", capsize=3,
@@ -51,7 +56,7 @@ def _plot_against(table: pd.DataFrame, key: str, others: list[str], out_dir: Pat
         if metric == "ate_rmse" and "reckoning_ate_rmse" in summary:
             ax.axhline(summary["reckoning_ate_rmse"].mean(), color="0.5", linestyle="--", label="dead reckoning")
         ax.set_title(title, fontsize=10)
-        ax.set_xlabel(key.split(".")[-1])
+        ax.set_xlabel(short_name(key))
         if numeric and summary[key].min() > 0 and summary[key].max() / summary[key].min() >= 20:
             ax.set_xscale("log")
         ax.grid(alpha=0.3)
@@ -59,7 +64,7 @@ def _plot_against(table: pd.DataFrame, key: str, others: list[str], out_dir: Pat
     if labels:
         fig.legend(handles, labels, loc="lower center", ncol=min(len(labels), 5), fontsize=8)
     fig.tight_layout(rect=(0, 0.1 if labels else 0, 1, 1))
-    path = out_dir / f"plot_{key.split('.')[-1]}.png"
+    path = out_dir / f"plot_{short_name(key)}.png"
     fig.savefig(path, dpi=110)
     plt.close(fig)
     return path
@@ -88,7 +93,7 @@ def _maps_side_by_side(table: pd.DataFrame, keys: list[str], out_dir: Path, limi
         ax.set_aspect("equal")
         ax.set_xticks([])
         ax.set_yticks([])
-        ax.set_title(", ".join(f"{k.split('.')[-1]}={row[k]}" for k in keys) + f"\nATE {row.ate_rmse:.3f} m", fontsize=8)
+        ax.set_title(", ".join(f"{short_name(k)}={row[k]}" for k in keys) + f"\nATE {row.ate_rmse:.3f} m", fontsize=8)
     for ax in list(axes.flat)[len(files):]:
         ax.axis("off")
     fig.tight_layout()
