@@ -11,6 +11,7 @@ import pandas as pd
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 import bench_corners  # noqa: E402
+import bench_env  # noqa: E402
 import bench_fastslam  # noqa: E402
 import bench_laser  # noqa: E402
 import bench_sweep  # noqa: E402
@@ -23,6 +24,7 @@ def main() -> int:
                   pd.DataFrame([bench_corners.speed(Path(folder))])]
         tables += [pd.DataFrame([row]) for row in bench_fastslam.run()]
         tables += [pd.DataFrame([row]) for row in bench_sweep.run()]
+        tables.append(pd.DataFrame([bench_env.run()]))
         for table in tables:
             print(table.set_index("benchmark").to_markdown(floatfmt=".3g"), end="\n\n")
         print(bench_corners.quality(Path(folder)).to_markdown(floatfmt=".4f"))

@@ -5,7 +5,12 @@ map sidecars) -> corners -> FastSLAM -> metrics. Start with ``mazeslam.simulate`
 ``mazeslam.log.read``.
 """
 
+import gymnasium
+
 from mazeslam.envs.simulator import SimulationConfig, simulate
 
 __all__ = ["SimulationConfig", "simulate"]
+
+if "mazeslam/Maze-v0" not in gymnasium.registry:
+    gymnasium.register(id="mazeslam/Maze-v0", entry_point="mazeslam.envs.maze_env:MazeEnv")
 __version__ = "0.1.0"

@@ -155,8 +155,11 @@ class VirtualLaser:
 
     def scan(self, pose: np.ndarray, rng: np.random.Generator) -> np.ndarray:
         """Noisy ranges (N,) as the sensor reports them: metres, 0 for no return."""
+        return self.measure(self.true_ranges(pose), rng)
+
+    def measure(self, ranges: np.ndarray, rng: np.random.Generator) -> np.ndarray:
+        """What the sensor reports for the true ranges (N,): noise, dropouts, 0 outside its range."""
         p = self.params
-        ranges = self.true_ranges(pose)
         noisy = ranges + rng.normal(0.0, p.range_noise_std, size=ranges.shape) if p.range_noise_std else ranges
         dropped = rng.random(ranges.shape) < p.dropout if p.dropout else np.zeros(ranges.shape, dtype=bool)
         valid = np.isfinite(ranges) & (noisy >= p.min_range) & (noisy <= p.max_range) & ~dropped

@@ -88,6 +88,19 @@ def shortest_path(maze: Maze, source, target) -> list[tuple[int, int]]:
     return path[::-1]
 
 
+def steer_to(pose: np.ndarray, target: np.ndarray, params: DriveParams) -> tuple[float, float]:
+    """(speed m/s, turn rate rad/s) that take a robot at ``pose`` towards the point ``target``:
+    turn on the spot while the heading is off by more than ``turn_in_place_above``, else drive
+    with proportional steering, slowing down near the target."""
+    offset = np.asarray(target, dtype=float) - pose[:2]
+    error = wrap_angle(np.arctan2(offset[1], offset[0]) - pose[2])
+    turn = float(np.clip(params.steering_gain * error, -params.turn_rate, params.turn_rate))
+    if abs(error) > params.turn_in_place_above:
+        return 0.0, turn
+    speed = min(params.cruise_speed, params.steering_gain * np.hypot(*offset)) * np.cos(error)
+    return float(speed), turn
+
+
 class ExplorerPolicy:
     """Follows the exploration tour from cell centre to cell centre, then keeps touring random cells.
 
@@ -103,19 +116,9 @@ class ExplorerPolicy:
         self._current = self.waypoints.popleft()
 
     def __call__(self, t: float, pose: np.ndarray) -> tuple[float, float]:
-        p = self.params
-        target = self.maze.cell_center(*self._current)
-        offset = target - pose[:2]
-        if np.hypot(*offset) < p.waypoint_tolerance:
+        if np.hypot(*(self.maze.cell_center(*self._current) - pose[:2])) < self.params.waypoint_tolerance:
             self._next_waypoint()
-            target = self.maze.cell_center(*self._current)
-            offset = target - pose[:2]
-        error = wrap_angle(np.arctan2(offset[1], offset[0]) - pose[2])
-        turn = float(np.clip(p.steering_gain * error, -p.turn_rate, p.turn_rate))
-        if abs(error) > p.turn_in_place_above:
-            return 0.0, turn
-        speed = min(p.cruise_speed, p.steering_gain * np.hypot(*offset)) * np.cos(error)
-        return float(speed), turn
+        return steer_to(pose, self.maze.cell_center(*self._current), self.params)
 
     def _next_waypoint(self) -> None:
         if not self.waypoints:

@@ -81,28 +81,33 @@ class World:
         x, y = self.body.position
         return np.array([x, y, wrap_angle(self.body.angle)])
 
-    def step(self, left_travel: float, right_travel: float, dt: float) -> None:
-        """Advance ``dt`` seconds with each wheel's ground contact travelling the given metres."""
+    def step(self, left_travel: float, right_travel: float, dt: float) -> bool:
+        """Advance ``dt`` seconds with each wheel's ground contact travelling the given metres.
+
+        Returns whether the robot touched a wall during the step."""
         speed = 0.5 * (left_travel + right_travel) / dt
         turn_rate = (right_travel - left_travel) / (self.robot.wheelbase * dt)
         heading = self.body.angle + 0.5 * turn_rate * dt  # midpoint heading over the step
         self.body.velocity = (speed * np.cos(heading), speed * np.sin(heading))
         self.body.angular_velocity = turn_rate
         self.space.step(dt)
-        self._push_out_of_walls()
+        return self._push_out_of_walls()
 
-    def _push_out_of_walls(self, iterations: int = 4) -> None:
-        """Move the disc out of any wall it overlaps after a step.
+    def _push_out_of_walls(self, iterations: int = 4) -> bool:
+        """Move the disc out of any wall it overlaps after a step; return whether it touched one.
 
         pymunk corrects overlaps gradually, over many steps; since the wheels set the velocity anew
         every step, the disc would creep into a wall it drives against. Each contact's penetration
         depth is undone along its normal (a corner takes a second pass).
         """
+        touched = False
         for _ in range(iterations):
             contacts = self.space.shape_query(self.disc)
             if not contacts:
-                return
+                break
+            touched = True
             for contact in contacts:
                 normal = contact.contact_point_set.normal  # from the disc towards the wall
                 depth = min((point.distance for point in contact.contact_point_set.points), default=0.0)
                 self.body.position += normal * depth  # depth < 0: moves away from the wall
+        return touched

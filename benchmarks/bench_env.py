@@ -1,0 +1,100 @@
+"""Benchmark: mazeslam/Maze-v0 steps per second (180 beams, 16 x 16 maze, one process), side by
+side with ir-sim stepping a comparable robot (differential drive, 37 mm disc) with a comparable
+lidar (180 beams over 360 degrees, 0.8 m) among the same maze walls, in the same run.
+Targets: at least 2000 steps/s and 3x ir-sim's rate. ir-sim is optional (``pip install ir-sim``);
+without it only mazeslam's rate is reported.
+Run: ``python benchmarks/bench_env.py``.
+"""
+
+from __future__ import annotations
+
+import os
+import tempfile
+import time
+from pathlib import Path
+
+import gymnasium as gym
+import numpy as np
+
+import mazeslam  # noqa: F401  (registers the environments)
+from mazeslam.envs.maze import generate_maze
+
+ROWS = COLS = 16
+STEPS = 1000
+TARGET_RATE = 2000.0
+TARGET_RATIO = 3.0
+
+
+def mazeslam_rate(maze) -> float:
+    env = gym.make("mazeslam/Maze-v0", maze=maze, max_steps=10 * STEPS)
+    env.reset(seed=0)
+    env.action_space.seed(0)
+    actions = [env.action_space.sample() for _ in range(STEPS)]
+    began = time.perf_counter()
+    for action in actions:
+        env.step(action)
+    return STEPS / (time.perf_counter() - began)
+
+
+def irsim_rate(maze, steps: int = 300) -> float | None:
+    os.environ.setdefault("MPLBACKEND", "Agg")
+    try:
+        import irsim
+    except ImportError:
+        return None
+    from mazeslam.envs.walls import wall_geometry
+
+    obstacles = "\n".join(
+        f"  - shape: {{name: 'polygon', vertices: [[{a}, {b}], [{c}, {b}], [{c}, {d}], [{a}, {d}]]}}\n"
+        f"    state: [0, 0, 0]"
+        for a, b, c, d in wall_geometry(maze).boxes)
+    start = maze.cell_center(0, 0)
+    world = f"""world:
+  height: {maze.rows * maze.cell_size + 0.1}
+  width: {maze.cols * maze.cell_size + 0.1}
+  step_time: 0.1
+  sample_time: 0.1
+  offset: [-0.05, -0.05]
+  collision_mode: 'stop'
+robot:
+  - kinematics: {{name: 'diff'}}
+    shape: {{name: 'circle', radius: 0.037}}
+    state: [{start[0]}, {start[1]}, 0]
+    vel_max: [0.13, 4.9]
+    sensors:
+      - type: 'lidar2d'
+        range_min: 0.0
+        range_max: 0.8
+        angle_range: {2 * np.pi}
+        number: 180
+obstacle:
+{obstacles}
+"""
+    with tempfile.TemporaryDirectory() as folder:
+        path = Path(folder) / "maze_world.yaml"
+        path.write_text(world)
+        env = irsim.make(str(path), display=False, log_level="ERROR")
+        rng = np.random.default_rng(0)
+        actions = [np.array([[rng.uniform(-0.13, 0.13)], [rng.uniform(-4.9, 4.9)]]) for _ in range(steps)]
+        began = time.perf_counter()
+        for action in actions:
+            env.step(action=action)
+        return steps / (time.perf_counter() - began)
+
+
+def run() -> dict:
+    maze = generate_maze(ROWS, COLS, 0)
+    ours = mazeslam_rate(maze)
+    theirs = irsim_rate(maze)
+    row = {"benchmark": f"env steps/s, 180 beams, {ROWS}x{COLS} maze", "mazeslam_steps_per_s": ours,
+           "target": TARGET_RATE}
+    if theirs is not None:
+        row.update({"irsim_steps_per_s": theirs, "ratio": ours / theirs})
+    row["met"] = ours >= TARGET_RATE and (theirs is None or ours / theirs >= TARGET_RATIO)
+    return row
+
+
+if __name__ == "__main__":
+    import pandas as pd
+
+    print(pd.DataFrame([run()]).set_index("benchmark").to_markdown(floatfmt=".4g"))

@@ -1,0 +1,51 @@
+"""Pictures of the Gymnasium environment, drawn off-screen with matplotlib (no display needed)."""
+
+from __future__ import annotations
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+from matplotlib.patches import Circle, Rectangle  # noqa: E402
+
+
+def draw_maze_env(env, slam: dict | None = None, size_pixels: int = 480) -> np.ndarray:
+    """An RGB image (H, W, 3) of ``env``: visited cells shaded, walls (seen ones dark), the robot,
+    its laser rays; with ``slam`` (``{"particles": (P, 3), "landmarks": (L, 2)}``) the filter too."""
+    fig = plt.figure(figsize=(size_pixels / 100, size_pixels / 100), dpi=100)
+    ax = fig.add_axes((0, 0, 1, 1))
+    maze, s = env.maze, env.maze.cell_size
+    for row, col in np.argwhere(env.visited):
+        ax.add_patch(Rectangle((col * s, row * s), s, s, color="#dfeedd", zorder=0))
+    for x1, y1, x2, y2 in env.walls.surfaces:
+        ax.plot([x1, x2], [y1, y2], color="0.75", linewidth=1.5, zorder=1)
+    seen = env._samples[env.seen]
+    ax.plot(seen[:, 0], seen[:, 1], ".", color="0.15", markersize=2, zorder=2)
+    pose = env.world.pose
+    ranges = env.last_scan.astype(float)
+    valid = ranges > 0
+    angles = pose[2] + env.laser.bearings[valid]
+    ends = pose[:2] + ranges[valid, None] * np.column_stack([np.cos(angles), np.sin(angles)])
+    for end in ends[:: max(1, len(ends) // 60)]:
+        ax.plot([pose[0], end[0]], [pose[1], end[1]], color="tab:red", linewidth=0.4, alpha=0.5, zorder=3)
+    if slam is not None:
+        particles = slam.get("particles")
+        if particles is not None:
+            ax.plot(particles[:, 0], particles[:, 1], ".", color="red", markersize=2, zorder=4)
+        landmarks = slam.get("landmarks")
+        if landmarks is not None and len(landmarks):
+            ax.plot(landmarks[:, 0], landmarks[:, 1], "+", color="tab:purple", markersize=8, zorder=4)
+    radius = env.config.robot.body_radius
+    ax.add_patch(Circle(pose[:2], radius, color="tab:blue", zorder=5))
+    ax.plot([pose[0], pose[0] + radius * np.cos(pose[2])], [pose[1], pose[1] + radius * np.sin(pose[2])],
+            color="white", linewidth=2, zorder=6)
+    margin = 0.02
+    ax.set_xlim(-margin, maze.cols * s + margin)
+    ax.set_ylim(-margin, maze.rows * s + margin)
+    ax.set_aspect("equal")
+    ax.axis("off")
+    fig.canvas.draw()
+    image = np.asarray(fig.canvas.buffer_rgba())[..., :3].copy()
+    plt.close(fig)
+    return image
