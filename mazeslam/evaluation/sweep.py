@@ -204,6 +204,13 @@ def execute_run(sweep: Sweep, run: dict, maps_folder: str | None = None) -> dict
         "map_rmse": raw_map["rmse"], "map_aligned_rmse": aligned_map_error["rmse"],
         "map_precision": aligned_map_error["precision"], "map_recall": aligned_map_error["recall"],
         "landmarks": len(result.landmarks),
+        "spurious_landmarks": len(result.landmarks) - aligned_map_error["matched"],
+        "true_corners": len(world["corners"]),
+        "ess_median": float(np.median([r.effective_sample_size for r in result.reports])) if result.reports else np.nan,
+        "new_per_scan": float(np.mean([r.new for r in result.reports])) / slam_config.fastslam.NPARTICLES
+        if result.reports else np.nan,
+        "ambiguous_per_scan": float(np.mean([r.ambiguous for r in result.reports])) / slam_config.fastslam.NPARTICLES
+        if result.reports else np.nan,
         "median_nees": float(np.nanmedian(normalized_estimation_error(result.mean_poses, result.pose_covariances, truth))),
         "resamplings": result.resamplings, "scans": len(result.reports),
         "slam_seconds": seconds, "log_seconds": course_log.duration,

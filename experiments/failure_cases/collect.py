@@ -1,0 +1,42 @@
+"""One table of every failure case and remedy, from the case sweeps' results.
+
+    python experiments/failure_cases/collect.py     (after running each case's sweep.toml)
+
+Writes table.md beside this file: per case and filter variant, the mean over the seeds.
+"""
+
+from pathlib import Path
+
+import pandas as pd
+
+HERE = Path(__file__).resolve().parent
+CASES = ["default", "long_corridor", "wide_room", "narrow", "symmetric", "sparse_turns", "few_points"]
+VARIANT = "slam.fastslam.version+slam.fastslam.NPARTICLES"
+NAMES = {"1/100": "FastSLAM 1.0, 100 particles", "2/100": "FastSLAM 2.0, 100 particles",
+         "1/1000": "FastSLAM 1.0, 1000 particles"}
+
+
+def main():
+    rows = []
+    for case in CASES:
+        path = HERE / case / "results" / "results.csv"
+        if not path.exists():
+            continue
+        table = pd.read_csv(path)
+        for variant, group in table.groupby(VARIANT, sort=False):
+            rows.append({
+                "case": case, "filter": NAMES.get(variant, variant), "runs": len(group),
+                "ATE [cm]": 100 * group.ate_rmse.mean(), "dead reckoning [cm]": 100 * group.reckoning_ate_rmse.mean(),
+                "ATE aligned [cm]": 100 * group.ate_aligned_rmse.mean(),
+                "map aligned [cm]": 100 * group.map_aligned_rmse.mean(),
+                "landmarks / true corners": f"{group.landmarks.mean():.1f} / {group.true_corners.iloc[0]}",
+                "spurious": group.spurious_landmarks.mean(), "median ESS": group.ess_median.mean(),
+                "new per scan": group.new_per_scan.mean(), "ambiguous per scan": group.ambiguous_per_scan.mean(),
+            })
+    result = pd.DataFrame(rows)
+    (HERE / "table.md").write_text(result.to_markdown(index=False, floatfmt=".2f") + "\n")
+    print(result.to_markdown(index=False, floatfmt=".2f"))
+
+
+if __name__ == "__main__":
+    main()
