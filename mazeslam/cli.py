@@ -13,6 +13,7 @@ import click
 
 from mazeslam import log
 from mazeslam.config import ConfigError
+from mazeslam.robot.interface import RobotError
 
 
 @click.group()
@@ -218,6 +219,43 @@ def slam(log_file, particles, config_path, out_dir, seed, association, version, 
 
 
 @main.command()
+@click.option("--out", "out", type=click.Path(dir_okay=False, path_type=Path), required=True,
+              help="Course log to write (its map sidecar records the beam geometry).")
+@click.option("--port", help="The e-puck's serial port, e.g. /dev/ttyUSB0.")
+@click.option("--camera", help="Camera device index or video file of the omnidirectional camera.")
+@click.option("--sim", is_flag=True, help="Record from the simulator instead (same recorder).")
+@click.option("--maze", default="random", show_default=True, help="With --sim: 'random' or a maze file.")
+@click.option("--seed", type=int, default=0, show_default=True, help="With --sim: the maze's and noise's seed.")
+@click.option("--beams", type=click.IntRange(min=2), default=180, show_default=True, help="N, ranges per scan.")
+@click.option("--scan-period", type=click.FloatRange(min=0, min_open=True), default=0.75, show_default=True,
+              help="T_b_S, seconds between scans.")
+@click.option("--odometry-rate", type=click.FloatRange(min=0, min_open=True), default=5.0, show_default=True,
+              help="F_O_U, odometry records per second.")
+@click.option("--center", nargs=2, type=float, help="Mirror centre in the image, pixels (x y).")
+@click.option("--inner-radius", type=float, default=40.0, show_default=True, help="Ring's inner radius, pixels.")
+@click.option("--outer-radius", type=float, help="Ring's outer radius, pixels [default: detect the mirror].")
+@click.option("--height", type=float, default=0.126, show_default=True, help="Mirror model h, metres.")
+@click.option("--alpha", type=float, default=107.0, show_default=True, help="Mirror model alpha, pixels/radian.")
+@click.option("--threshold", default="180", show_default=True, help="Wall grey level (1-255) or 'otsu'.")
+@click.option("--script", "script", type=click.Path(exists=True, dir_okay=False, path_type=Path),
+              help="Drive from 'duration speed turn_rate' lines instead of the keyboard.")
+@click.option("--duration", type=click.FloatRange(min=0, min_open=True), help="Stop after this many seconds.")
+@beam_geometry_options
+def record(out, port, camera, sim, maze, seed, beams, scan_period, odometry_rate, center, inner_radius,
+           outer_radius, height, alpha, threshold, script, duration, first_beam_angle, beam_direction, mount_x):
+    """The exercise's logger: drive the e-puck (keyboard: w/s speed, a/d turn, space stop, q quit)
+    and record odometry and omnidirectional-camera scans as a course log."""
+    from mazeslam.record_command import run_record
+
+    lines = run_record(out=out, port=port, camera=camera, sim=sim, maze=maze, seed=seed, beams=beams,
+                       scan_period=scan_period, odometry_rate=odometry_rate, center=center,
+                       inner_radius=inner_radius, outer_radius=outer_radius, height=height, alpha=alpha,
+                       threshold=threshold, script=script, duration=duration,
+                       geometry_overrides=_geometry_overrides(first_beam_angle, beam_direction, mount_x))
+    click.echo("\n".join(lines))
+
+
+@main.command()
 @click.argument("sweep_file", type=click.Path(exists=True, dir_okay=False, path_type=Path))
 @click.option("--out", "out_dir", type=click.Path(file_okay=False, path_type=Path), required=True,
               help="Results folder; runs already in it are not run again (resume).")
@@ -282,7 +320,7 @@ def run():
     """Entry point: turn known input errors into a one-line message and exit status 2."""
     try:
         main(standalone_mode=True)
-    except (log.LogFormatError, ConfigError, ValueError, FileNotFoundError) as error:
+    except (log.LogFormatError, ConfigError, ValueError, FileNotFoundError, RobotError) as error:
         click.echo(f"error: {error}", err=True)
         raise SystemExit(2) from error
 

@@ -63,9 +63,14 @@ class WheelEncoders:
         left, right = commanded * scale + slip
         return float(left), float(right)
 
+    @property
+    def steps(self) -> np.ndarray:
+        """Whole steps (left, right) the wheels were commanded since the start: the step counters."""
+        return np.floor(self._commanded / self.metres_per_step + 1e-9).astype(np.int64)
+
     def read(self) -> tuple[float, float]:
         """The odometry since the previous read: (dX metres, dTheta radians)."""
-        steps = np.floor(self._commanded / self.metres_per_step + 1e-9).astype(np.int64)
+        steps = self.steps
         left, right = (steps - self._reported_steps) * self.metres_per_step
         self._reported_steps = steps
         return 0.5 * (left + right), (right - left) / self.robot.wheelbase

@@ -1,0 +1,90 @@
+"""What the recorder, teleoperation and agents need from a robot, real or simulated.
+
+A ``Robot`` drives its wheels, reports its odometry since the last report, and scans. Errors are
+``RobotError`` (the robot answered something it should not) or ``RobotDisconnected`` (it is gone);
+both name the device and what happened.
+"""
+
+from __future__ import annotations
+
+import abc
+
+import numpy as np
+
+from mazeslam.envs.laser import VirtualLaser
+from mazeslam.envs.maze import Maze
+from mazeslam.envs.odometry import WheelEncoders
+from mazeslam.envs.simulator import SimulationConfig
+from mazeslam.envs.walls import wall_geometry
+from mazeslam.envs.world import World
+
+
+class RobotError(RuntimeError):
+    """The robot or its sensor answered something it should not (garbled, out of protocol)."""
+
+
+class RobotDisconnected(RobotError):
+    """The robot or its sensor stopped answering or went away."""
+
+
+class Robot(abc.ABC):
+    """A differential-drive robot with odometry and a range scanner."""
+
+    @abc.abstractmethod
+    def set_wheel_speeds(self, left: float, right: float) -> None:
+        """Command the wheels' surface speeds, m/s (forward positive)."""
+
+    @abc.abstractmethod
+    def read_odometry(self) -> tuple[float, float]:
+        """Distance travelled (m) and heading change (rad) since the previous call."""
+
+    @abc.abstractmethod
+    def read_scan(self) -> np.ndarray:
+        """One scan: (N,) ranges in metres in the log's beam order, 0 = no return."""
+
+    def close(self) -> None:
+        """Stop and release the device."""
+
+    def advance(self, seconds: float) -> None:
+        """Let ``seconds`` pass. A real robot moves on its own; the simulator moves here."""
+
+
+class SimulatedRobot(Robot):
+    """The ``Robot`` interface over the simulator: pymunk world, slipping wheels, virtual laser.
+
+    Time passes only in ``advance``, in physics steps, so a recorder can drive it as fast as the
+    computer allows. ``pose`` is the true pose (for truth sidecars).
+    """
+
+    def __init__(self, maze: Maze, config: SimulationConfig | None = None, seed: int = 0,
+                 start_pose: np.ndarray | None = None):
+        self.config = config or SimulationConfig()
+        self.maze = maze
+        self.walls = wall_geometry(maze)
+        self.rng = np.random.default_rng(seed)
+        self.start_pose = np.array(start_pose if start_pose is not None else [*maze.cell_center(*maze.start_cell), 0.0])
+        self.world = World(self.walls.boxes, self.config.robot, self.start_pose)
+        self.encoders = WheelEncoders(self.config.robot, self.config.odometry, self.rng)
+        self.laser = VirtualLaser(self.config.laser, self.walls.surfaces)
+        self.speeds = (0.0, 0.0)
+        self.time = 0.0
+        self._dt = 1.0 / self.config.logger.physics_rate
+
+    @property
+    def pose(self) -> np.ndarray:
+        return self.world.pose
+
+    def set_wheel_speeds(self, left: float, right: float) -> None:
+        top = self.config.robot.max_wheel_speed
+        self.speeds = (float(np.clip(left, -top, top)), float(np.clip(right, -top, top)))
+
+    def advance(self, seconds: float) -> None:
+        for _ in range(max(0, round(seconds / self._dt))):
+            self.world.step(*self.encoders.drive(*self.speeds, self._dt), self._dt)
+            self.time += self._dt
+
+    def read_odometry(self) -> tuple[float, float]:
+        return self.encoders.read()
+
+    def read_scan(self) -> np.ndarray:
+        return self.laser.scan(self.world.pose, self.rng)

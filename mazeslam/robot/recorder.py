@@ -1,0 +1,170 @@
+"""The exercise's logger (Main.m / RobotGUI) as code: drive a robot, write a course log.
+
+``Recorder.run`` polls a controller for (speed, turn rate) commands, drives the robot's wheels,
+writes an odometry record every ``1 / odometry_rate`` s (F_O_U) and a scan every ``scan_period`` s
+(T_b_S) with an odometry record just before it, and flushes every record. If the robot or its
+camera goes away, the log written so far stays valid (every line complete), its sidecar is
+written, and ``RobotDisconnected`` is raised saying how many records were saved.
+
+Time comes from ``clock`` and passes in ``wait``: wall time and ``time.sleep`` for a real robot,
+the simulator's own clock and ``SimulatedRobot.advance`` for a simulated one (as fast as it can go).
+"""
+
+from __future__ import annotations
+
+import math
+import sys
+import time
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from mazeslam import sidecars
+from mazeslam.beams import BeamGeometry
+from mazeslam.log import LogWriter
+from mazeslam.robot.interface import Robot, RobotDisconnected, RobotError, SimulatedRobot
+
+
+@dataclass
+class Command:
+    """What a controller asks for: forward speed (m/s), turn rate (rad/s), or to stop recording."""
+
+    speed: float = 0.0
+    turn_rate: float = 0.0
+    quit: bool = False
+
+
+class ScriptedController:
+    """Commands from a list of ``(duration s, speed m/s, turn_rate rad/s)``; quits after the last."""
+
+    def __init__(self, commands):
+        self.ends = np.cumsum([c[0] for c in commands])
+        self.commands = [tuple(float(v) for v in c) for c in commands]
+
+    def __call__(self, t: float) -> Command:
+        index = int(np.searchsorted(self.ends, t, side="right"))
+        if index >= len(self.commands):
+            return Command(quit=True)
+        return Command(self.commands[index][1], self.commands[index][2])
+
+
+class KeyboardController:
+    """The GUI's two sliders on the keyboard: w/s faster/slower, a/d turn left/right, space stop,
+    q quit. Reads the terminal without waiting (raw mode, restored on close)."""
+
+    SPEED_STEP, TURN_STEP = 0.01, 0.25  # m/s, rad/s per key press
+
+    def __init__(self, max_speed: float, max_turn_rate: float):
+        import termios
+        import tty
+
+        self.max_speed, self.max_turn = max_speed, max_turn_rate
+        self.command = Command()
+        self._fd = sys.stdin.fileno()
+        self._saved = termios.tcgetattr(self._fd)
+        tty.setcbreak(self._fd)
+
+    def __call__(self, t: float) -> Command:
+        import select
+
+        while select.select([sys.stdin], [], [], 0)[0]:
+            key = sys.stdin.read(1).lower()
+            c = self.command
+            if key == "w":
+                c.speed = min(c.speed + self.SPEED_STEP, self.max_speed)
+            elif key == "s":
+                c.speed = max(c.speed - self.SPEED_STEP, 0.0)  # forward only, as the GUI's slider
+            elif key == "a":
+                c.turn_rate = min(c.turn_rate + self.TURN_STEP, self.max_turn)
+            elif key == "d":
+                c.turn_rate = max(c.turn_rate - self.TURN_STEP, -self.max_turn)
+            elif key == " ":
+                c.speed = c.turn_rate = 0.0
+            elif key == "q":
+                c.quit = True
+        return self.command
+
+    def close(self) -> None:
+        import termios
+
+        termios.tcsetattr(self._fd, termios.TCSADRAIN, self._saved)
+
+
+class Recorder:
+    """Drives ``robot`` and writes ``out`` (course log) and its map sidecar (beam geometry);
+    for a ``SimulatedRobot`` also the truth sidecar and the walls."""
+
+    def __init__(self, robot: Robot, out: str | Path, beams: int, geometry: BeamGeometry, scan_period: float = 0.75,
+                 odometry_rate: float = 5.0, wheelbase: float = 0.053, clock=None, wait=None):
+        if scan_period <= 0 or odometry_rate <= 0:
+            raise ValueError("scan_period and odometry_rate must be positive")
+        self.robot, self.out, self.beams, self.geometry = robot, Path(out), beams, geometry
+        self.scan_period, self.odometry_period = scan_period, 1.0 / odometry_rate
+        self.wheelbase = wheelbase
+        simulated = isinstance(robot, SimulatedRobot)
+        self.clock = clock or ((lambda: robot.time) if simulated else time.monotonic)
+        self.wait = wait or (robot.advance if simulated else time.sleep)
+        self.records = 0
+        self._times, self._poses = [], []
+
+    def run(self, controller, duration: float = math.inf, status=None) -> int:
+        """Record until the controller quits or ``duration`` s pass; returns the records written."""
+        start = self.clock()
+        next_odometry, next_scan = self.odometry_period, self.scan_period
+        writer = LogWriter(self.out, self.beams)
+        try:
+            while True:
+                t = self.clock() - start
+                command = controller(t)
+                if command.quit or t >= duration:
+                    break
+                half = 0.5 * command.turn_rate * self.wheelbase
+                self.robot.set_wheel_speeds(command.speed - half, command.speed + half)
+                event = min(next_odometry, next_scan)
+                self.wait(max(0.0, event - (self.clock() - start)))
+                t = round(event, 6)
+                scan_due = next_scan <= event + 1e-9
+                self._write_odometry(writer, t)
+                next_odometry = event + self.odometry_period if next_odometry <= event + 1e-9 else next_odometry
+                if scan_due:
+                    writer.write_scan(t, self.robot.read_scan())
+                    self._note(t)
+                    next_scan = event + self.scan_period
+                if status is not None:
+                    status(t, command, self.records)
+        except RobotDisconnected as error:
+            raise RobotDisconnected(f"{error}; the log {self.out} keeps the {self.records} records written "
+                                    f"before it") from error
+        finally:
+            writer.close()
+            self._write_sidecars()
+            try:
+                self.robot.set_wheel_speeds(0.0, 0.0)
+            except RobotError:
+                pass  # gone: nothing left to stop
+        return self.records
+
+    def _write_odometry(self, writer: LogWriter, t: float) -> None:
+        distance, turn = self.robot.read_odometry()
+        writer.write_odometry(t, distance, turn)
+        self._note(t)
+
+    def _note(self, t: float) -> None:
+        self.records += 1
+        if isinstance(self.robot, SimulatedRobot):
+            self._times.append(t)
+            self._poses.append(self.robot.pose)
+
+    def _write_sidecars(self) -> None:
+        sensor = {"beams": self.beams, **self.geometry.to_dict()}
+        if isinstance(self.robot, SimulatedRobot):
+            walls = self.robot.walls
+            sidecars.write_map(sidecars.map_path(self.out), walls.surfaces, walls.corners, sensor,
+                               corner_convex=walls.corner_convex.tolist(), start_pose=self.robot.start_pose.tolist(),
+                               source="mazeslam record --sim")
+            if self._times:
+                sidecars.write_truth(sidecars.truth_path(self.out), np.array(self._times), np.array(self._poses))
+        else:
+            sidecars.write_map(sidecars.map_path(self.out), np.empty((0, 4)), np.empty((0, 2)), sensor,
+                               source="mazeslam record (real robot: no ground truth)")
