@@ -14,6 +14,10 @@ Episode end: terminated when every cell has been visited; truncated after ``max_
 Mazes: random R x C mazes drawn at every reset, perfect by default (``loop_fraction=0``: one path
 between any two cells), or a given ``Maze`` / maze file; ``reset(options=...)`` may override
 ``maze``, ``rows``, ``cols``, ``loop_fraction``, ``start_cell`` and ``start_heading``.
+
+A real robot (``robot=EPuck(...)``, any ``mazeslam.robot.interface.Robot``) can stand in for the
+simulator: the same observations and actions, each step lasting ``control_period`` of wall time;
+with no ground truth there is no reward (0), no termination and ``info`` holds only the time.
 ``info``: the true ``pose`` (x, y, theta), ``coverage`` (share of the wall surface seen),
 ``visited`` (share of cells entered), ``collision``, ``time`` (s).
 
@@ -31,12 +35,9 @@ import numpy as np
 from gymnasium import spaces
 from scipy.spatial import cKDTree
 
-from mazeslam.envs.laser import VirtualLaser
 from mazeslam.envs.maze import Maze, generate_maze, load_maze
-from mazeslam.envs.odometry import WheelEncoders
 from mazeslam.envs.simulator import SimulationConfig
-from mazeslam.envs.walls import wall_geometry
-from mazeslam.envs.world import World
+from mazeslam.robot.interface import Robot, SimulatedRobot
 
 #: Spacing (m) of the points along the walls that count as seen once a beam lands near them.
 WALL_SAMPLE_SPACING = 0.01
@@ -49,7 +50,7 @@ class MazeEnv(gym.Env):
                  cols: int = 4, maze: Maze | str | None = None, loop_fraction: float = 0.0, max_steps: int = 3000,
                  control_period: float = 0.1,
                  action_type: str = "velocity", wall_reward: float = 10.0, cell_reward: float = 1.0,
-                 collision_penalty: float = 0.5):
+                 collision_penalty: float = 0.5, robot: Robot | None = None):
         if render_mode is not None and render_mode not in self.metadata["render_modes"]:
             raise ValueError(f"render_mode must be one of {self.metadata['render_modes']} or None, got {render_mode!r}")
         if action_type not in ("velocity", "wheels"):
@@ -57,6 +58,7 @@ class MazeEnv(gym.Env):
         if max_steps < 1 or control_period <= 0:
             raise ValueError("max_steps must be >= 1 and control_period positive")
         self.render_mode = render_mode
+        self.hardware = robot
         self.config = config or SimulationConfig()
         self.rows, self.cols, self.maze_option, self.loop_fraction = rows, cols, maze, loop_fraction
         self.max_steps = max_steps
@@ -80,22 +82,24 @@ class MazeEnv(gym.Env):
     def reset(self, *, seed: int | None = None, options: dict | None = None):
         super().reset(seed=seed)
         options = options or {}
+        self.steps, self.time = 0, 0.0
+        if self.hardware is not None:
+            self.hardware.read_odometry()  # forget the motion before the episode
+            self.last_scan = np.asarray(self.hardware.read_scan(), dtype=np.float32)
+            return {"scan": self.last_scan, "odometry": np.zeros(2, dtype=np.float32)}, {"time": 0.0}
         self.maze = self._choose_maze(options)
         start_cell = tuple(options.get("start_cell", (int(self.np_random.integers(self.maze.rows)),
                                                       int(self.np_random.integers(self.maze.cols)))))
         heading = float(options.get("start_heading", self.np_random.uniform(-math.pi, math.pi)))
         self.start_pose = np.array([*self.maze.cell_center(*start_cell), heading])
-        self.walls = wall_geometry(self.maze)
-        self.world = World(self.walls.boxes, self.config.robot, self.start_pose)
-        self.encoders = WheelEncoders(self.config.robot, self.config.odometry, self.np_random)
-        self.laser = VirtualLaser(self.config.laser, self.walls.surfaces)
+        self.simulated = SimulatedRobot(self.maze, self.config, start_pose=self.start_pose, rng=self.np_random)
+        self.walls, self.laser = self.simulated.walls, self.simulated.laser
         self._samples = _wall_samples(self.walls.surfaces)
         self._sample_tree = cKDTree(self._samples)
         self.seen = np.zeros(len(self._samples), dtype=bool)
         self.visited = np.zeros((self.maze.rows, self.maze.cols), dtype=bool)
         self.visited[self.maze.cell_of(*self.start_pose[:2])] = True
-        self.steps, self.time = 0, 0.0
-        self._see(self.world.pose)
+        self._see()
         observation = {"scan": self.last_scan, "odometry": np.zeros(2, dtype=np.float32)}
         return observation, self._info(collision=False)
 
@@ -111,20 +115,20 @@ class MazeEnv(gym.Env):
                              options.get("loop_fraction", self.loop_fraction))
 
     def step(self, action):
-        if self.maze is None:
+        if self.maze is None and self.hardware is None:
             raise RuntimeError("call reset() before step()")
         left, right = self._wheel_speeds(np.clip(np.asarray(action, dtype=float), -1.0, 1.0))
-        dt = 1.0 / self.config.logger.physics_rate
-        collision = False
-        for _ in range(self.physics_steps):
-            collision |= self.world.step(*self.encoders.drive(left, right, dt), dt)
         self.steps += 1
-        self.time += self.physics_steps * dt
-        distance, turn = self.encoders.read()
-        pose = self.world.pose
+        if self.hardware is not None:
+            return self._hardware_step(left, right)
+        self.simulated.set_wheel_speeds(left, right)
+        collision = self.simulated.advance(self.physics_steps / self.config.logger.physics_rate)
+        self.time = self.simulated.time
+        distance, turn = self.simulated.read_odometry()
+        pose = self.simulated.pose
         new_cell = not self.visited[self.maze.cell_of(*pose[:2])]
         self.visited[self.maze.cell_of(*pose[:2])] = True
-        newly_seen = self._see(pose)
+        newly_seen = self._see()
         reward = (self.wall_reward * newly_seen * WALL_SAMPLE_SPACING + self.cell_reward * new_cell
                   - self.collision_penalty * collision)
         terminated = bool(self.visited.all())
@@ -134,17 +138,35 @@ class MazeEnv(gym.Env):
             self.render()
         return observation, float(reward), terminated, truncated, self._info(collision)
 
+    def _hardware_step(self, left: float, right: float):
+        """One step on a real robot: command, let ``control_period`` of wall time pass, observe."""
+        import time
+
+        self.hardware.set_wheel_speeds(left, right)
+        time.sleep(self.control_period)
+        self.time += self.control_period
+        distance, turn = self.hardware.read_odometry()
+        self.last_scan = np.asarray(self.hardware.read_scan(), dtype=np.float32)
+        observation = {"scan": self.last_scan, "odometry": np.array([distance, turn], dtype=np.float32)}
+        return observation, 0.0, False, self.steps >= self.max_steps, {"time": self.time}
+
+    @property
+    def world(self):
+        """The simulated robot's pymunk world (its ``pose`` is the truth)."""
+        return self.simulated.world
+
     def _wheel_speeds(self, action: np.ndarray) -> tuple[float, float]:
         robot = self.config.robot
         if self.action_type == "wheels":
             return float(action[0]) * robot.max_wheel_speed, float(action[1]) * robot.max_wheel_speed
         return robot.wheel_speeds(float(action[0]) * robot.max_wheel_speed, float(action[1]) * self.top_turn_rate)
 
-    def _see(self, pose: np.ndarray) -> int:
-        """Scan from ``pose`` (into ``last_scan``) and mark the wall samples its noise-free beams land
-        on; return how many are new."""
-        ranges = self.laser.true_ranges(pose)
-        self.last_scan = self.laser.measure(ranges, self.np_random).astype(np.float32)
+    def _see(self) -> int:
+        """Scan (into ``last_scan``) and mark the wall samples its noise-free beams land on; return
+        how many are new."""
+        pose = self.simulated.pose
+        ranges = self.simulated.true_ranges()
+        self.last_scan = self.simulated.read_scan(ranges).astype(np.float32)
         hit = np.isfinite(ranges)
         geometry = self.config.laser
         c, s = math.cos(pose[2]), math.sin(pose[2])
