@@ -202,3 +202,39 @@ def test_the_gymnasium_env_drives_the_emulated_e_puck():
     assert robot.pose[0] > maze.cell_center(0, 0)[0]
     env.close()
     emulator.close()
+
+
+def test_keyboard_teleoperation_on_a_terminal(monkeypatch):
+    import io
+    import os
+    import sys
+
+    from mazeslam.robot.recorder import KeyboardController
+
+    master, slave = os.openpty()
+    terminal = io.TextIOWrapper(os.fdopen(slave, "rb", buffering=0), encoding="ascii")
+    monkeypatch.setattr(sys, "stdin", terminal)
+    controller = KeyboardController(max_speed=0.13, max_turn_rate=4.9)
+    try:
+        os.write(master, b"www")  # three presses arriving together
+        assert wait_for(lambda: controller(0.0).speed == pytest.approx(0.03))
+        os.write(master, b"a")
+        assert wait_for(lambda: controller(0.0).turn_rate == pytest.approx(0.25))
+        os.write(master, b" ")
+        assert wait_for(lambda: controller(0.0).speed == 0.0 and controller(0.0).turn_rate == 0.0)
+        os.write(master, b"q")
+        assert wait_for(lambda: controller(0.0).quit)
+    finally:
+        controller.close()
+        os.close(master)
+
+
+def wait_for(condition, seconds=2.0):
+    import time
+
+    deadline = time.time() + seconds
+    while time.time() < deadline:
+        if condition():
+            return True
+        time.sleep(0.01)
+    return False

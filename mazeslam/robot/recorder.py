@@ -66,10 +66,16 @@ class KeyboardController:
         tty.setcbreak(self._fd)
 
     def __call__(self, t: float) -> Command:
+        import os
         import select
 
-        while select.select([sys.stdin], [], [], 0)[0]:
-            key = sys.stdin.read(1).lower()
+        keys = ""
+        while select.select([self._fd], [], [], 0)[0]:  # every key pressed since the last call
+            chunk = os.read(self._fd, 64)
+            if not chunk:
+                break
+            keys += chunk.decode("ascii", errors="ignore").lower()
+        for key in keys:
             c = self.command
             if key == "w":
                 c.speed = min(c.speed + self.SPEED_STEP, self.max_speed)
