@@ -304,6 +304,18 @@ def import_mrclam_command(dataset, robot, out):
                f"{counts['landmark_records']} landmark observations); measurements left out: {skipped}")
 
 
+@import_group.command(name="carmen")
+@click.argument("carmen_log", type=click.Path(exists=True, dir_okay=False, path_type=Path))
+@click.option("--out", "out", type=click.Path(dir_okay=False, path_type=Path), required=True,
+              help="Course log to write, e.g. runs/aces.log; reference poses and sensor sidecars go beside it.")
+def import_carmen_command(carmen_log, out):
+    """A CARMEN laser log (plain or gzipped): front-laser scans, wheel odometry, reference poses."""
+    from mazeslam.imports.carmen import import_carmen
+
+    counts = import_carmen(carmen_log, out)
+    click.echo(f"wrote {out}: " + ", ".join(f"{value} {key}" for key, value in counts.items()))
+
+
 @main.command()
 @click.option("--out", "out_dir", type=click.Path(file_okay=False, path_type=Path), default=Path("runs/demo"),
               show_default=True, help="Folder for the log, sidecars, table and figure.")

@@ -70,3 +70,63 @@ def test_corner_extraction_runs_on_every_scan_of_real_logs(name):
             assert np.all(np.linalg.eigvalsh(o.covariance_xy) > 0)
     assert lines > 2 * len(log.ranges)  # buildings: several walls in every scan on average
     assert observations > 0.5 * len(log.ranges)
+
+
+ANCHORED = """\
+ODOM 0 0 0 0 0 0 1.0 h 1.0
+ODOM 0.1 0 0 0 0 0 1.5 h 1.5
+FLASER 3 1.0 2.0 50.0 0.12 0.01 0.05 0.12 0.01 0.05 1.5 h 1.5
+ODOM 0.12 0.01 0.05 0 0 0 0 h 1.5
+ODOM 0.32 0.01 0.05 0 0 0 2.0 h 2.0
+FLASER 3 1.5 2.5 3.5 0.3 0.02 0.05 0.3 0.02 0.05 2.0 h 2.0
+"""
+
+
+def test_import_follows_the_re_anchored_odometry(tmp_path):
+    from mazeslam import log, sidecars
+    from mazeslam.imports.carmen import import_carmen
+
+    path = tmp_path / "a.log"
+    path.write_text("PARAM robot_front_laser_max 50 h 0\n" + ANCHORED)
+    counts = import_carmen(path, tmp_path / "a_course.log")
+    assert counts["scans"] == 2 and counts["re-anchoring ODOM messages"] == 1
+    course_log = log.read(tmp_path / "a_course.log")
+    records = list(course_log.records())
+    # 0.1 m of raw odometry before the first scan; after it, 0.2 m measured from the corrected pose
+    # (0.12, 0.01): the jump from the raw 0.1 to the corrected 0.12 is a correction, not motion.
+    odometry = [r for r in records if isinstance(r, log.OdometryRecord)]
+    assert [round(r.distance, 6) for r in odometry] == [0.1, 0.2]
+    scans = course_log.scans
+    np.testing.assert_allclose(scans[0], [1.0, 2.0, 0.0])  # 50 m = the laser's maximum: no return
+    _, reference = sidecars.read_truth(tmp_path / "a_course.truth.csv")
+    np.testing.assert_allclose(reference[-1], [0.3, 0.02, 0.05])
+    world = sidecars.read_map(tmp_path / "a_course.map.json")
+    assert "reference" in world["truth_kind"] and world["sensor"]["first_beam_angle"] == pytest.approx(-np.pi / 2)
+
+
+def test_imported_odometry_matches_the_reference_motion_between_scans(tmp_path):
+    from mazeslam import log, sidecars
+    from mazeslam.filters.motion import dead_reckoning
+    from mazeslam.geometry import relative
+    from mazeslam.imports.carmen import import_carmen
+
+    source = CARMEN / "aces-corrected.log.gz"
+    if not source.exists():
+        pytest.skip(f"CARMEN log not found at {source} (the shared data folder is absent)")
+    import_carmen(source, tmp_path / "aces.log")
+    course_log = log.read(tmp_path / "aces.log")
+    _, reference = sidecars.read_truth(tmp_path / "aces.truth.csv")
+    # Dead reckoning restarted at each scan's reference pose reaches the next scan close to it.
+    scans = np.flatnonzero(course_log.is_scan)
+    gaps = []
+    for a, b in zip(scans[:-1], scans[1:]):
+        stretch = dataclass_slice(course_log, a + 1, b + 1)
+        end = dead_reckoning(stretch, reference[a])[-1]
+        gaps.append(np.hypot(*relative(reference[b], end)[:2]))
+    assert np.median(gaps) < 0.1  # metres, over intervals of about 0.7 m
+
+
+def dataclass_slice(course_log, start, stop):
+    from mazeslam.log import CourseLog
+
+    return CourseLog(course_log.times[start:stop], course_log.flags[start:stop], course_log.values[start:stop])

@@ -38,6 +38,7 @@ class CarmenLog:
         odometry_times: (K,) seconds; odometry_poses: (K, 3) ODOM poses.
         params: PARAM name -> value (text).
         ignored: message type -> count of the lines not used.
+        sequence: the FLASER and ODOM messages in file order, as ("scan", i) / ("odom", j).
     """
 
     source: str
@@ -49,6 +50,7 @@ class CarmenLog:
     odometry_poses: np.ndarray
     params: dict = field(default_factory=dict)
     ignored: Counter = field(default_factory=Counter)
+    sequence: list = field(default_factory=list)
 
     @property
     def n_beams(self) -> int:
@@ -74,7 +76,7 @@ def _open_text(path: Path):
 def read_carmen(path: str | Path) -> CarmenLog:
     """Read the FLASER, ODOM and PARAM lines of a CARMEN log; errors name the file and the line."""
     path = Path(path)
-    scans, odometry, params, ignored = [], [], {}, Counter()
+    scans, odometry, params, ignored, sequence = [], [], {}, Counter(), []
     width = None
     with _open_text(path) as handle:
         for number, line in enumerate(handle, start=1):
@@ -92,8 +94,10 @@ def read_carmen(path: str | Path) -> CarmenLog:
                     width = n
                     values = [float(v) for v in parts[2 : n + 8]]
                     scans.append(values + [float(parts[n + 8])])
+                    sequence.append(("scan", len(scans) - 1))
                 elif kind == "ODOM":
                     odometry.append([float(v) for v in parts[1:4]] + [float(parts[7])])
+                    sequence.append(("odom", len(odometry) - 1))
                 elif kind == "PARAM" and len(parts) >= 3:
                     params[parts[1]] = parts[2]
                 else:
@@ -114,6 +118,7 @@ def read_carmen(path: str | Path) -> CarmenLog:
         odometry_poses=odometry_table[:, :3],
         params=params,
         ignored=ignored,
+        sequence=sequence,
     )
 
 
@@ -124,3 +129,75 @@ def is_carmen(path: str | Path) -> bool:
             if line.split()[:1] in (["FLASER"], ["ODOM"], ["PARAM"]):
                 return True
     return False
+
+
+def import_carmen(path: str | Path, out: str | Path) -> dict:
+    """Write a CARMEN log as a course log ``out`` with a reference-pose sidecar and a sensor sidecar.
+
+    In the "corrected" logs each scan carries the pose a mapping run estimated for it, and the ODOM
+    messages after a scan start again from that pose (an ODOM with timestamp 0 re-anchors them):
+    so the wheel odometry is the motion between consecutive ODOM messages *within* one scan
+    interval. Each such step becomes an odometry record (distance along the step, heading
+    change); each scan a scan record (ranges at or beyond the laser's maximum become 0, no
+    return). The scan's own "odometry" pose is the corrected one in these logs, so it adds no motion. ``*.truth.csv`` holds the
+    anchored poses (the corrected pose at each scan, plus the raw odometry since it) - a reference
+    from a mapping run, not independent ground truth; the map sidecar says so and records the
+    front laser's beam geometry. Returns counts.
+    """
+    from mazeslam import sidecars
+    from mazeslam.geometry import relative
+    from mazeslam.log import LogWriter
+
+    carmen = read_carmen(path)
+    max_range = carmen.max_range
+    out = Path(out)
+    times, poses = [], []
+    counts = Counter()
+    anchor = None  # the pose the current odometry stretch is measured from
+    last_time = -math.inf
+
+    def clock(t):
+        nonlocal last_time
+        if t < last_time:
+            counts["timestamps moved up to keep time increasing"] += 1
+            t = last_time
+        last_time = t
+        return t
+
+    with LogWriter(out, carmen.n_beams) as writer:
+        def step(t, pose):
+            nonlocal anchor
+            if anchor is not None:
+                motion = relative(anchor, pose)
+                distance = math.copysign(math.hypot(motion[0], motion[1]), motion[0])
+                writer.write_odometry(clock(t), distance, float(motion[2]))
+                times.append(last_time)
+                poses.append(pose)
+                counts["odometry records"] += 1
+            anchor = pose
+
+        for kind, index in carmen.sequence:
+            if kind == "odom":
+                t = carmen.odometry_times[index]
+                pose = carmen.odometry_poses[index]
+                if t == 0.0:  # re-anchoring to the corrected pose: no motion
+                    anchor = pose
+                    counts["re-anchoring ODOM messages"] += 1
+                    continue
+                step(t, pose)
+            else:
+                t = carmen.scan_times[index]
+                anchor = carmen.scan_poses[index]  # the next ODOM messages start from here
+                ranges = carmen.ranges[index]
+                writer.write_scan(clock(t), np.where(ranges >= max_range - 1e-6, 0.0, ranges))
+                times.append(last_time)
+                poses.append(carmen.scan_poses[index])
+                counts["scans"] += 1
+    sidecars.write_truth(sidecars.truth_path(out), np.array(times), np.array(poses))
+    sensor = {"beams": carmen.n_beams, "max_range": max_range, **FRONT_LASER.to_dict()}
+    sidecars.write_map(sidecars.map_path(out), np.empty((0, 4)), np.empty((0, 2)), sensor,
+                       start_pose=np.asarray(poses[0]).tolist() if poses else [0.0, 0.0, 0.0],
+                       truth_kind="reference: poses of a grid-mapping run (gmapping), not ground truth",
+                       source={"carmen_log": str(path), "ignored": dict(carmen.ignored)})
+    counts.update({f"ignored {k} lines": v for k, v in carmen.ignored.items()})
+    return dict(counts)
