@@ -15,7 +15,7 @@ import numpy as np
 
 from mazeslam import log, sidecars
 from mazeslam.beams import EXERCISE_CONVENTION, BeamGeometry
-from mazeslam.imports.carmen import FRONT_LASER, is_carmen, read_carmen
+from mazeslam.imports.carmen import front_laser, is_carmen, read_carmen
 
 
 @dataclass
@@ -73,7 +73,7 @@ def load_scans(path: str | Path, geometry_overrides: dict | None = None, strict:
     true_poses = true_corners = None
     if is_carmen(path):
         carmen = read_carmen(path)
-        geometry, origin = FRONT_LASER, "CARMEN front laser"
+        geometry, origin = front_laser(carmen.n_beams), "CARMEN front laser"
         times, ranges = carmen.scan_times, carmen.ranges
         records = np.arange(len(times))
     else:

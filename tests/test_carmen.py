@@ -6,7 +6,7 @@ import pytest
 from conftest import PROJECT_ROOT, SHARED_DATA
 from mazeslam.config import load_toml
 from mazeslam.filters.corners import CornerExtractor, CornerParams
-from mazeslam.imports.carmen import FRONT_LASER, is_carmen, read_carmen
+from mazeslam.imports.carmen import front_laser, is_carmen, read_carmen
 from mazeslam.log import LogFormatError
 
 CARMEN = SHARED_DATA / "carmen"
@@ -37,9 +37,11 @@ def test_read_hand_written_log(tmp_path):
     assert log.ignored["NEFF"] == 1 and log.ignored["#"] == 1
 
 
-def test_front_laser_geometry_spans_the_half_circle_ahead():
-    bearings = FRONT_LASER.bearings(181)
-    assert bearings[0] == pytest.approx(-np.pi / 2) and bearings[-1] == pytest.approx(np.pi / 2)
+@pytest.mark.parametrize("beams, last_degrees", [(180, 89.0), (181, 90.0), (360, 89.5), (361, 90.0)])
+def test_front_laser_geometry(beams, last_degrees):
+    bearings = front_laser(beams).bearings(beams)
+    assert bearings[0] == pytest.approx(-np.pi / 2) and np.degrees(bearings[-1]) == pytest.approx(last_degrees)
+    assert np.degrees(bearings[1] - bearings[0]) == pytest.approx(1.0 if beams < 300 else 0.5)
 
 
 def test_malformed_flaser_names_the_line(tmp_path):
@@ -59,7 +61,7 @@ def test_corner_extraction_runs_on_every_scan_of_real_logs(name):
         pytest.skip(f"CARMEN log not found at {path} (the shared data folder is absent)")
     log = read_carmen(path)
     params = load_toml(CornerParams, PROJECT_ROOT / "configs" / "corners" / "carmen.toml")
-    extractor = CornerExtractor(FRONT_LASER, log.n_beams, params)
+    extractor = CornerExtractor(front_laser(log.n_beams), log.n_beams, params)
     lines = observations = 0
     for ranges in log.ranges:
         features = extractor.extract(ranges)

@@ -6,8 +6,8 @@ Lines (whitespace separated) this reader uses::
     ODOM x y theta tv rv accel timestamp host logger_timestamp
     PARAM name value ...
 
-FLASER is the front laser: n ranges in metres over 180 degrees, from -90 degrees (right) to +90
-degrees (left) counter-clockwise, first and last beam included; ``x y theta`` is the corrected
+FLASER is the front laser: n ranges in metres from -90 degrees (right) counter-clockwise, one
+degree apart for 180/181 beams, half a degree for 360/361 (``front_laser``); ``x y theta`` is the corrected
 (reference) pose of the scan, ``odom_*`` the raw odometry pose. Every other message type (NEFF,
 RLASER, SYNC, comments, ...) is counted and otherwise ignored.
 """
@@ -63,8 +63,12 @@ class CarmenLog:
         return float(value) if value is not None else float(self.ranges.max())
 
 
-#: A CARMEN front laser: its beams from -90 to +90 degrees (both included), counter-clockwise.
-FRONT_LASER = BeamGeometry(first_beam_angle=-math.pi / 2, direction=1, field_of_view=math.pi)
+def front_laser(n_beams: int) -> BeamGeometry:
+    """A CARMEN front laser of ``n_beams``: counter-clockwise from -90 degrees, one beam a degree
+    for 180 or 181 beams and half a degree for 360 or 361 (the last beam at +89, +90, +89.5 or
+    +90 degrees)."""
+    step = math.pi / (n_beams - n_beams % 2)
+    return BeamGeometry(first_beam_angle=-math.pi / 2, direction=1, field_of_view=step * (n_beams - 1))
 
 
 def _open_text(path: Path):
@@ -194,7 +198,7 @@ def import_carmen(path: str | Path, out: str | Path) -> dict:
                 poses.append(carmen.scan_poses[index])
                 counts["scans"] += 1
     sidecars.write_truth(sidecars.truth_path(out), np.array(times), np.array(poses))
-    sensor = {"beams": carmen.n_beams, "max_range": max_range, **FRONT_LASER.to_dict()}
+    sensor = {"beams": carmen.n_beams, "max_range": max_range, **front_laser(carmen.n_beams).to_dict()}
     sidecars.write_map(sidecars.map_path(out), np.empty((0, 4)), np.empty((0, 2)), sensor,
                        start_pose=np.asarray(poses[0]).tolist() if poses else [0.0, 0.0, 0.0],
                        truth_kind="reference: poses of a grid-mapping run (gmapping), not ground truth",
