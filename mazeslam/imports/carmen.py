@@ -184,7 +184,8 @@ def import_carmen(path: str | Path, out: str | Path) -> dict:
             if kind == "odom":
                 t = carmen.odometry_times[index]
                 pose = carmen.odometry_poses[index]
-                if t == 0.0:  # re-anchoring to the corrected pose: no motion
+                # Re-anchoring to the corrected pose (timestamp 0, or simply the scan's own pose): no motion.
+                if t == 0.0 or (anchor is not None and np.allclose(pose, anchor, atol=1e-9)):
                     anchor = pose
                     counts["re-anchoring ODOM messages"] += 1
                     continue
