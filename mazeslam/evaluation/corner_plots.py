@@ -10,6 +10,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
+from mazeslam.evaluation.plots import save_figure  # noqa: E402
 from mazeslam.filters.corners import ScanFeatures  # noqa: E402
 
 KIND_STYLE = {
@@ -51,11 +52,4 @@ def plot_scan(path: str | Path, features: ScanFeatures, mount=(0.0, 0.0), title:
     """Save the figure of one scan (robot frame) to ``path``."""
     fig, ax = plt.subplots(figsize=(8, 7))
     draw_scan(ax, features, mount, true_corners)
-    ax.set_title(title)
-    ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=8)
-    fig.tight_layout()
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path, dpi=120)
-    plt.close(fig)
-    return path
+    return save_figure(fig, ax, path, title)

@@ -1,4 +1,4 @@
-"""Figure of a simulated run: the maze's walls and corners, the true path and estimated paths."""
+"""Figures: a simulated run (walls, corners, true and estimated paths), and saving any figure alike."""
 
 from __future__ import annotations
 
@@ -34,6 +34,11 @@ def plot_run(path: str | Path, walls: np.ndarray, corners: np.ndarray, truth: np
     ax.set_aspect("equal")
     ax.set_xlabel("x [m]")
     ax.set_ylabel("y [m]")
+    return save_figure(fig, ax, path, title)
+
+
+def save_figure(fig, ax, path: str | Path, title: str = "") -> Path:
+    """Title ``ax``, put its legend right of the plot, save ``fig`` to ``path`` (folders made) and close it."""
     ax.set_title(title)
     ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=8)
     fig.tight_layout()

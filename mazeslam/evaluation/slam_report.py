@@ -19,6 +19,7 @@ from mazeslam.beams import BeamGeometry  # noqa: E402
 from mazeslam.evaluation.metrics import (  # noqa: E402
     absolute_trajectory_error, align_se2, apply_se2, map_error, normalized_estimation_error, relative_pose_error,
 )
+from mazeslam.evaluation.plots import save_figure  # noqa: E402
 from mazeslam.filters.motion import dead_reckoning  # noqa: E402
 from mazeslam.geometry import compose, polar_to_cartesian, transform_points  # noqa: E402
 from mazeslam.slam import SlamResult  # noqa: E402
@@ -121,14 +122,7 @@ def plot_slam(path, result: SlamResult, points: np.ndarray, truth: np.ndarray | 
     ax.set_aspect("equal")
     ax.set_xlabel("x [m]")
     ax.set_ylabel("y [m]")
-    ax.set_title(title)
-    ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=8)
-    fig.tight_layout()
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path, dpi=120)
-    plt.close(fig)
-    return path
+    return save_figure(fig, ax, path, title)
 
 
 def _ellipse(mean, covariance, sigmas: float = 2.0) -> Ellipse:
