@@ -16,7 +16,6 @@ import time
 import tracemalloc
 from pathlib import Path
 
-import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
 
@@ -42,9 +41,8 @@ def _inputs(path, scans: int):
         if isinstance(record, log.OdometryRecord):
             steps.append(("predict", (record.distance, record.turn)))
         else:
-            observations = extractor.extract(record.ranges).observations
-            z = np.array([[o.range, o.bearing] for o in observations]).reshape(-1, 2)
-            covariances = np.array([o.covariance_rb for o in observations]).reshape(-1, 2, 2)
+            features = extractor.extract(record.ranges)
+            z, covariances = features.observation_array(), features.observation_covariances()
             steps.append(("update", (z, covariances)))
             if sum(kind == "update" for kind, _ in steps) == scans:
                 break

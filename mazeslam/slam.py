@@ -113,9 +113,8 @@ def run_fastslam(course_log: log.CourseLog, params: FastSLAMParams | None = None
 
 def _scan_observations(extractor: CornerExtractor, record: log.ScanRecord):
     """Corner observations of one scan: (K, 2) range/bearing, (K, 2, 2) covariances, no ids."""
-    observations = extractor.extract(record.ranges).observations
-    z = np.array([[o.range, o.bearing] for o in observations]).reshape(-1, 2)
-    return z, np.array([o.covariance_rb for o in observations]).reshape(-1, 2, 2), None
+    features = extractor.extract(record.ranges)
+    return features.observation_array(), features.observation_covariances(), None
 
 
 def _same_time_landmarks(records: list, position: int) -> list:

@@ -23,9 +23,8 @@ def test_vectorised_update_equals_the_per_particle_loop(default_run):
             fast.predict(record.distance, record.turn)
             loop.predict(record.distance, record.turn)  # same seed: the same noise draws
         else:
-            observations = extractor.extract(record.ranges).observations
-            z = np.array([[o.range, o.bearing] for o in observations]).reshape(-1, 2)
-            covariances = np.array([o.covariance_rb for o in observations]).reshape(-1, 2, 2)
+            features = extractor.extract(record.ranges)
+            z, covariances = features.observation_array(), features.observation_covariances()
             a, b = fast.update(z, covariances), loop.update(z, covariances)
             reports.append((a, b))
         np.testing.assert_allclose(fast.poses, loop.poses, atol=1e-12)

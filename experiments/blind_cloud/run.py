@@ -76,9 +76,8 @@ def main(noise_scale: float = 1.0):
             if blind_start is None:
                 blind_start = (record.index, slam.mean_pose(), slam.pose_covariance())
         else:
-            observations = extractor.extract(record.ranges).observations
-            z = np.array([[o.range, o.bearing] for o in observations]).reshape(-1, 2)
-            covariances = np.array([o.covariance_rb for o in observations]).reshape(-1, 2, 2)
+            features = extractor.extract(record.ranges)
+            z, covariances = features.observation_array(), features.observation_covariances()
             slam.update(z, covariances)
         phase = "before" if record.t < BLIND_FROM else "blind" if record.t < BLIND_UNTIL else "after"
         if isinstance(record, log.ScanRecord) or phase == "blind":

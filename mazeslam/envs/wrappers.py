@@ -103,10 +103,8 @@ class OnlineFastSLAM(gym.Wrapper):
         return observation, reward, terminated, truncated, info
 
     def _update(self, scan) -> None:
-        observations = self.extractor.extract(np.asarray(scan, dtype=float)).observations
-        z = np.array([[o.range, o.bearing] for o in observations]).reshape(-1, 2)
-        covariances = np.array([o.covariance_rb for o in observations]).reshape(-1, 2, 2)
-        self.last_report = self.slam.update(z, covariances)
+        features = self.extractor.extract(np.asarray(scan, dtype=float))
+        self.last_report = self.slam.update(features.observation_array(), features.observation_covariances())
 
     def _estimate(self) -> dict:
         return {"pose": self.slam.mean_pose(), "pose_covariance": self.slam.pose_covariance(),

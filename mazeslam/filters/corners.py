@@ -133,6 +133,10 @@ class ScanFeatures:
         """(K, 2) observation ranges and bearings, the filter's input."""
         return np.array([[o.range, o.bearing] for o in self.observations]).reshape(-1, 2)
 
+    def observation_covariances(self) -> np.ndarray:
+        """(K, 2, 2) the observations' range/bearing covariances."""
+        return np.array([o.covariance_rb for o in self.observations]).reshape(-1, 2, 2)
+
 
 class CornerExtractor:
     """Extracts lines and corner observations from scans of a fixed beam geometry.
