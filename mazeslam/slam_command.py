@@ -13,6 +13,10 @@ from mazeslam.scans import resolve_geometry
 from mazeslam.slam import load_slam_config, slam_on_file, start_pose
 
 
+#: About how many frames ``--animate`` draws, whatever the log's length.
+ANIMATION_FRAMES = 150
+
+
 def run_slam_command(log_file, config_path, out_dir, filter_changes: dict | None = None, geometry_overrides=None,
                      animate=False, progress=True) -> list[str]:
     """Run, write ``out_dir``/{trajectory.csv, best_trajectory.csv, map.json, slam.png[, slam.gif]};
@@ -27,7 +31,9 @@ def run_slam_command(log_file, config_path, out_dir, filter_changes: dict | None
     course_log = log.read(log_file)
     geometry, origin = resolve_geometry(log_file, config.sensor.as_dict())
     start = start_pose(log_file)
-    result = slam_on_file(log_file, config, progress, snapshot_every=2 if animate else 0)
+    updates = int(course_log.is_scan.sum() + course_log.is_landmark.sum())
+    every = max(1, updates // ANIMATION_FRAMES) if animate else 0  # frames for the GIF, at most ~ANIMATION_FRAMES
+    result = slam_on_file(log_file, config, progress, snapshot_every=every)
     lines = [f"{log_file}: {len(course_log)} records, {len(result.reports)} observation updates; beam geometry from {origin}",
              f"FastSLAM: {config.fastslam.NPARTICLES} particles, {result.resamplings} resamplings, "
              f"{len(result.landmarks)} landmarks in the best particle's map, "
