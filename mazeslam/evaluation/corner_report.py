@@ -13,6 +13,7 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 from matplotlib.animation import FuncAnimation, PillowWriter  # noqa: E402
+import numpy as np  # noqa: E402
 from tqdm.auto import tqdm  # noqa: E402
 
 from mazeslam import log  # noqa: E402
@@ -83,8 +84,10 @@ class CornerReport:
             return None
         return transform_points(inverse(self.scans.true_poses[index]), self.scans.true_corners)
 
-    def animate(self, path, frames_per_second: float = 4.0) -> Path:
-        """Every scan in turn, in one GIF, with fixed axes so the view does not jump."""
+    def animate(self, path, frames_per_second: float = 4.0, most_frames: int = 200) -> Path:
+        """The scans in turn (every scan, or evenly spaced ones up to ``most_frames``), in one GIF,
+        with fixed axes so the view does not jump."""
+        frames = np.unique(np.linspace(0, len(self.features) - 1, min(len(self.features), most_frames)).astype(int))
         mount = (self.scans.geometry.mount_x, self.scans.geometry.mount_y)
         fig, ax = plt.subplots(figsize=(6, 6))
         reach = 1.05 * max((float(abs(f.points).max()) for f in self.features if len(f.points)), default=1.0)
@@ -96,7 +99,7 @@ class CornerReport:
             ax.set_ylim(-reach, reach)
             ax.set_title(self._title(index), fontsize=9)
 
-        animation = FuncAnimation(fig, draw, frames=len(self.features))
+        animation = FuncAnimation(fig, draw, frames=frames)
         path = Path(path)
         path.parent.mkdir(parents=True, exist_ok=True)
         animation.save(path, writer=PillowWriter(fps=frames_per_second))
