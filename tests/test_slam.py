@@ -20,6 +20,7 @@ def errors(run_result, slam_result):
     return {
         "slam": absolute_trajectory_error(slam_result.mean_poses, truth)["rmse"],
         "slam_aligned": absolute_trajectory_error(slam_result.mean_poses, truth, align=True)["rmse"],
+        "reckoning": absolute_trajectory_error(reckoned, truth)["rmse"],
         "reckoning_aligned": absolute_trajectory_error(reckoned, truth, align=True)["rmse"],
         "map": map_error(slam_result.landmarks, world["corners"]),
     }
@@ -29,6 +30,7 @@ def test_default_run_beats_dead_reckoning_and_maps_the_corners(default_run):
     result = slam_on_file(default_run.log_path, progress=False)
     e = errors(default_run, result)
     assert e["slam"] < 0.03
+    assert e["slam"] <= e["reckoning"] / 3  # the bar, on the default run and filter seed
     assert e["slam_aligned"] < 0.5 * e["reckoning_aligned"]
     assert e["map"]["rmse"] < 0.03
     assert e["map"]["precision"] >= 0.9  # landmarks are real corners, not clutter
