@@ -275,6 +275,28 @@ def sweep(sweep_file, out_dir, workers, scheduler, quiet):
     click.echo("wrote " + ", ".join(str(p) for p in [*result.paths.values(), *make_report(out_dir)[1:]]))
 
 
+@main.command(name="odometry-noise")
+@click.argument("log_file", type=click.Path(exists=True, dir_okay=False, path_type=Path))
+def odometry_noise(log_file):
+    """Measure a log's odometry noise against its truth sidecar, as [fastslam] settings."""
+    from mazeslam import sidecars
+    from mazeslam.evaluation.odometry_noise import measure_odometry_noise
+
+    truth_file = sidecars.truth_path(log_file)
+    if not truth_file.exists():
+        raise click.ClickException(f"{log_file}: no truth sidecar {truth_file.name}: the noise is measured against it")
+    try:
+        noise = measure_odometry_noise(log.read(log_file), sidecars.read_truth(truth_file)[1])
+    except ValueError as error:
+        raise click.ClickException(f"{log_file}: {error}") from error
+    click.echo(f"# {log_file}: {noise.stretches} stretches between observations, {noise.distance:.2f} m driven, "
+               f"{noise.turn:.1f} rad turned (odometry against {truth_file.name})")
+    click.echo("[fastslam]")
+    click.echo(f"sigmaX = {noise.sigmaX:.4g}          # m per sqrt(m)")
+    click.echo(f"sigmaTH = {noise.sigmaTH:.4g}         # rad per sqrt(rad) turned")
+    click.echo(f"sigmaTH_drive = {noise.sigmaTH_drive:.4g}   # rad per sqrt(m) driven")
+
+
 @main.command()
 @click.argument("out_dir", type=click.Path(exists=True, file_okay=False, path_type=Path))
 def report(out_dir):

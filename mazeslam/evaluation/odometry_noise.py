@@ -1,0 +1,98 @@
+"""Measure a log's odometry noise against its truth, in the units of the filter's motion model.
+
+FastSLAM's motion model (``filters/motion.py``) lets each odometry step of distance d and turn
+dtheta err by variances that grow with the motion:
+
+    var(distance error) = sigmaX^2 |d|
+    var(heading error)  = sigmaTH^2 |dtheta| + sigmaTH_drive^2 |d|
+
+Given a log and its true (or reference) pose at every record, this cuts the log into stretches
+between consecutive observations (scans or landmark records: what the filter predicts across),
+replays the odometry from the true pose at the start of each stretch, and compares where it lands
+with the true pose at its end. Over all stretches, the along-track
+position error and the heading error are fitted to the model by non-negative least squares:
+``e_theta^2`` on ``(D, T)`` gives ``sigmaTH_drive^2`` and ``sigmaTH^2``; ``e_along^2`` on ``(D, T)``
+gives ``sigmaX^2`` (the T term absorbs the small shift of the axle while turning on the spot, which
+the filter's model leaves out). D and T are the stretch's summed |d| and |dtheta|.
+Systematic errors (a wrong wheel radius) count as noise here, as they must for the filter.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.optimize import nnls
+
+from mazeslam.filters.motion import dead_reckoning
+from mazeslam.geometry import relative, wrap_angle
+from mazeslam.log import CourseLog
+
+
+@dataclass(frozen=True)
+class OdometryNoise:
+    """Odometry noise in the filter's units.
+
+    Attributes:
+        sigmaX: distance noise, m per sqrt(m) travelled.
+        sigmaTH: heading noise from turning, rad per sqrt(rad) turned.
+        sigmaTH_drive: heading noise from driving, rad per sqrt(m) travelled.
+        stretches: how many stretches between observations were used.
+        distance: odometry distance they cover, m.
+        turn: odometry turning they cover, rad.
+    """
+
+    sigmaX: float
+    sigmaTH: float
+    sigmaTH_drive: float
+    stretches: int
+    distance: float
+    turn: float
+
+
+def stretch_errors(course_log: CourseLog, truth: np.ndarray) -> np.ndarray:
+    """Odometry errors over each stretch between consecutive observations.
+
+    Args:
+        course_log: the log (R records).
+        truth: (R, 3) true pose at every record, world frame (m, rad).
+
+    Returns:
+        (K, 4) rows ``[D, T, e_along, e_theta]``: summed |distance| (m) and |turn| (rad) of the
+        stretch's odometry, the error along the direction travelled (m) and the heading error (rad)
+        of the odometry replayed from the true pose at the stretch's start.
+    """
+    truth = np.asarray(truth, dtype=float)
+    if truth.shape != (len(course_log), 3):
+        raise ValueError(f"truth must hold one pose (x, y, theta) per record: {len(course_log)} x 3, got {truth.shape}")
+    boundaries = np.flatnonzero(~course_log.is_odometry)
+    if len(boundaries) < 2:
+        raise ValueError("measuring the odometry noise needs a log with at least two observations (scans or landmarks)")
+    reckoned = dead_reckoning(course_log, (0.0, 0.0, 0.0))
+    increments = np.where(course_log.is_odometry[:, None], course_log.values[:, :2], 0.0)
+    rows = []
+    for start, end in zip(boundaries[:-1], boundaries[1:]):
+        moved, turned = np.abs(increments[start + 1 : end + 1]).sum(axis=0)
+        if moved == 0.0 and turned == 0.0:
+            continue
+        odometry_step = relative(reckoned[start], reckoned[end])
+        true_step = relative(truth[start], truth[end])
+        heading = math.atan2(odometry_step[1], odometry_step[0]) if moved > 0 else 0.0
+        along = (true_step[0] - odometry_step[0]) * math.cos(heading) + (true_step[1] - odometry_step[1]) * math.sin(heading)
+        rows.append((moved, turned, along, wrap_angle(true_step[2] - odometry_step[2])))
+    return np.array(rows).reshape(-1, 4)
+
+
+def measure_odometry_noise(course_log: CourseLog, truth: np.ndarray) -> OdometryNoise:
+    """Fit the filter's odometry noise parameters to a log with truth (see the module docstring)."""
+    errors = stretch_errors(course_log, truth)
+    moved, turned, along, heading = errors.T
+    if not (moved > 0).any():
+        raise ValueError("the log never drives: the distance noise cannot be measured")
+    motion = np.column_stack([moved, turned])
+    (distance_var, _), _ = nnls(motion, along**2)  # turning on the spot also shifts the axle a little
+    (drive_var, turn_var), _ = nnls(motion, heading**2)
+    return OdometryNoise(math.sqrt(distance_var), math.sqrt(turn_var), math.sqrt(drive_var), len(errors),
+                         float(moved.sum()), float(turned.sum()))
+

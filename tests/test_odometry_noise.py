@@ -1,0 +1,66 @@
+"""Measuring a log's odometry noise against its truth, checked against the simulator's slip model."""
+
+import dataclasses
+import math
+
+import numpy as np
+import pytest
+from click.testing import CliRunner
+
+from mazeslam import log, sidecars, simulate
+from mazeslam.cli import main
+from mazeslam.envs.odometry import OdometryParams
+from mazeslam.envs.world import RobotParams
+from mazeslam.envs.simulator import SimulationConfig
+from mazeslam.evaluation.odometry_noise import measure_odometry_noise
+
+
+def run_with_slip(tmp_path, slip_std):
+    config = SimulationConfig()
+    config = dataclasses.replace(config, odometry=OdometryParams(slip_std=slip_std),
+                                 maze=dataclasses.replace(config.maze, rows=8, cols=8))
+    return simulate(tmp_path / "run.log", config, seed=3, progress=False)
+
+
+def measured(run):
+    return measure_odometry_noise(log.read(run.log_path), sidecars.read_truth(run.truth_path)[1])
+
+
+def test_measured_noise_matches_the_wheel_slip_it_comes_from(tmp_path):
+    """Each wheel slips by slip_std sqrt(travel), independently. Driving a distance d, both wheels
+    travel d: the distance (l + r) / 2 errs by slip_std sqrt(d / 2), the heading (r - l) / b by
+    slip_std sqrt(2 d) / b. Turning dtheta on the spot, each wheel travels b dtheta / 2: the heading
+    errs by slip_std sqrt(dtheta / b)."""
+    slip, wheelbase = 0.003, RobotParams().wheelbase
+    noise = measured(run_with_slip(tmp_path, slip))
+    assert noise.stretches > 500 and noise.distance > 10
+    assert noise.sigmaX == pytest.approx(slip / math.sqrt(2), rel=0.15)
+    assert noise.sigmaTH_drive == pytest.approx(slip * math.sqrt(2) / wheelbase, rel=0.15)
+    assert noise.sigmaTH == pytest.approx(slip / math.sqrt(wheelbase), rel=0.15)
+
+
+def test_without_slip_only_a_small_floor_remains(tmp_path):
+    """Whole encoder steps, the 1e-6 rounding of the log and brushing walls leave a floor at least
+    five times below the default slip's noise (0.0021, 0.013, 0.080)."""
+    noise = measured(run_with_slip(tmp_path, 0.0))
+    assert noise.sigmaX < 0.0021 / 5 and noise.sigmaTH < 0.013 / 5 and noise.sigmaTH_drive < 0.080 / 5
+
+
+def test_bad_input_is_named(default_run):
+    course_log = log.read(default_run.log_path)
+    with pytest.raises(ValueError, match="one pose"):
+        measure_odometry_noise(course_log, np.zeros((3, 3)))
+    odometry_only = log.CourseLog(course_log.times[~course_log.is_scan], course_log.flags[~course_log.is_scan],
+                                  course_log.values[~course_log.is_scan])
+    with pytest.raises(ValueError, match="at least two observations"):
+        measure_odometry_noise(odometry_only, np.zeros((len(odometry_only), 3)))
+
+
+def test_command_prints_fastslam_settings_or_names_the_missing_truth(default_run, tmp_path):
+    result = CliRunner().invoke(main, ["odometry-noise", str(default_run.log_path)])
+    assert result.exit_code == 0, result.output
+    assert "[fastslam]" in result.output and "sigmaTH_drive = " in result.output
+    bare = tmp_path / "bare.log"
+    bare.write_text(default_run.log_path.read_text())
+    result = CliRunner().invoke(main, ["odometry-noise", str(bare)])
+    assert result.exit_code != 0 and "no truth sidecar" in result.output
