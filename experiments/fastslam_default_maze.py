@@ -7,9 +7,9 @@ Run: ``python experiments/fastslam_default_maze.py`` (about a minute).
 
 ``--filter-seeds K`` runs each filter with K seeds of its own random draws (the table's rows
 are then per seed and filter seed). ``--ideal`` measures the floor of this setting instead: a
-noise-free laser, corners named from the truth (known association), a tight sensor model
-(each corner's own covariance plus 0.5 mm and 0.1 degree) and 1000 particles; what error remains is the drift of a map built from
-what the sensor can see, not noise or association.
+noise-free laser, corners named from the truth (known association), a tight sensor model (each
+corner's own covariance plus 0.5 mm and 0.1 degree) and 1000 particles; what error remains is the
+drift of a map built from what the sensor can see, not noise or association.
 """
 
 from __future__ import annotations

@@ -122,6 +122,12 @@ class CourseLog:
         return self.values[self.is_odometry, :2]
 
     @property
+    def increments(self) -> np.ndarray:
+        """(R, 2) ``[dX, dTheta]`` of every record: the odometry's increment, zero for scans and
+        landmark observations (they move nothing)."""
+        return np.where(self.is_odometry[:, None], self.values[:, :2], 0.0)
+
+    @property
     def scans(self) -> np.ndarray:
         """(S, N) ranges of the scan records in record order, metres, 0 = no return."""
         return self.values[self.is_scan]

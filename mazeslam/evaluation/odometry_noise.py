@@ -9,8 +9,8 @@ dtheta err by variances that grow with the motion:
 Given a log and its true (or reference) pose at every record, this cuts the log into stretches
 between consecutive observations (scans or landmark records: what the filter predicts across),
 replays the odometry from the true pose at the start of each stretch, and compares where it lands
-with the true pose at its end. Over all stretches, the along-track
-position error and the heading error are fitted to the model by non-negative least squares:
+with the true pose at its end. Over all stretches, the along-track position error and the heading
+error are fitted to the model by non-negative least squares:
 ``e_theta^2`` on ``(D, T)`` gives ``sigmaTH_drive^2`` and ``sigmaTH^2``; ``e_along^2`` on ``(D, T)``
 gives ``sigmaX^2`` (the T term absorbs the small shift of the axle while turning on the spot, which
 the filter's model leaves out). D and T are the stretch's summed |d| and |dtheta|.
@@ -70,7 +70,7 @@ def stretch_errors(course_log: CourseLog, truth: np.ndarray) -> np.ndarray:
     if len(boundaries) < 2:
         raise ValueError("measuring the odometry noise needs a log with at least two observations (scans or landmarks)")
     reckoned = dead_reckoning(course_log, (0.0, 0.0, 0.0))
-    increments = np.where(course_log.is_odometry[:, None], course_log.values[:, :2], 0.0)
+    increments = course_log.increments
     rows = []
     for start, end in zip(boundaries[:-1], boundaries[1:]):
         moved, turned = np.abs(increments[start + 1 : end + 1]).sum(axis=0)
@@ -95,4 +95,3 @@ def measure_odometry_noise(course_log: CourseLog, truth: np.ndarray) -> Odometry
     (drive_var, turn_var), _ = nnls(motion, heading**2)
     return OdometryNoise(math.sqrt(distance_var), math.sqrt(turn_var), math.sqrt(drive_var), len(errors),
                          float(moved.sum()), float(turned.sum()))
-

@@ -47,10 +47,9 @@ def dead_reckoning(log: CourseLog, start_pose=(0.0, 0.0, 0.0)) -> np.ndarray:
 
     A scan record gets the pose of the odometry before it. World frame; metres and radians.
     """
-    increments = np.where(log.is_odometry[:, None], log.values[:, :2], 0.0)  # scans move nothing
     poses = np.empty((len(log), 3))
     pose = np.asarray(start_pose, dtype=float)
-    for index, (distance, turn) in enumerate(increments):
+    for index, (distance, turn) in enumerate(log.increments):
         pose = advance_pose(pose, distance, turn)
         poses[index] = pose
     return poses
