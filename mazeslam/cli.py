@@ -277,20 +277,32 @@ def sweep(sweep_file, out_dir, workers, scheduler, quiet):
 
 @main.command(name="odometry-noise")
 @click.argument("log_file", type=click.Path(exists=True, dir_okay=False, path_type=Path))
-def odometry_noise(log_file):
+@click.option("--config", "config_path", type=click.Path(exists=True, dir_okay=False, path_type=Path),
+              help="A slam config; with [scan_matching] enabled, the laser odometry is measured instead.")
+def odometry_noise(log_file, config_path):
     """Measure a log's odometry noise against its truth sidecar, as [fastslam] settings."""
     from mazeslam import sidecars
-    from mazeslam.evaluation.odometry_noise import measure_odometry_noise
+    from mazeslam.evaluation.odometry_noise import fit_noise, laser_stretch_errors, measure_odometry_noise
+    from mazeslam.filters.scan_matching import laser_odometry
+    from mazeslam.scans import resolve_geometry
+    from mazeslam.slam import load_slam_config
 
     truth_file = sidecars.truth_path(log_file)
     if not truth_file.exists():
         raise click.ClickException(f"{log_file}: no truth sidecar {truth_file.name}: the noise is measured against it")
+    course_log, truth = log.read(log_file), sidecars.read_truth(truth_file)[1]
+    config = load_slam_config(config_path)
     try:
-        noise = measure_odometry_noise(log.read(log_file), sidecars.read_truth(truth_file)[1])
+        if config.scan_matching.enabled:
+            geometry, _ = resolve_geometry(log_file, config.sensor.as_dict())
+            laser = laser_odometry(course_log, geometry, config.scan_matching)
+            noise, source = fit_noise(laser_stretch_errors(laser, truth[laser.scan_records])), "laser odometry"
+        else:
+            noise, source = measure_odometry_noise(course_log, truth), "odometry"
     except ValueError as error:
         raise click.ClickException(f"{log_file}: {error}") from error
     click.echo(f"# {log_file}: {noise.stretches} stretches between observations, {noise.distance:.2f} m driven, "
-               f"{noise.turn:.1f} rad turned (odometry against {truth_file.name})")
+               f"{noise.turn:.1f} rad turned ({source} against {truth_file.name})")
     click.echo("[fastslam]")
     click.echo(f"sigmaX = {noise.sigmaX:.4g}          # m per sqrt(m)")
     click.echo(f"sigmaTH = {noise.sigmaTH:.4g}         # rad per sqrt(rad) turned")

@@ -2,6 +2,8 @@
 
 This is the exercise's main loop (fastslam1_sim.m): for every line of the log, an odometry entry
 moves the particles, a laser entry is turned into corner observations that weigh and correct them.
+With laser odometry (``[scan_matching] enabled``), the particles move at each scan by the scan's
+match to the one before instead, and odometry records only inform that match.
 """
 
 from __future__ import annotations
@@ -20,6 +22,7 @@ from mazeslam.beams import EXERCISE_CONVENTION, BeamGeometry
 from mazeslam.config import load_toml
 from mazeslam.filters.corners import CornerExtractor, CornerParams
 from mazeslam.filters.fastslam import FastSLAM, FastSLAMParams, UpdateReport
+from mazeslam.filters.scan_matching import LaserOdometry, ScanMatchParams, laser_odometry
 from mazeslam.scans import resolve_geometry
 
 
@@ -40,6 +43,8 @@ class SlamResult:
             particle's landmarks (L, 2)), for animations.
         dropped_odometry: the odometry records left out as glitches (``OdometryRecord``s).
         pose_covariances: (R, 3, 3) the particle cloud's covariance after each record.
+        laser_odometry: the scan-to-scan motion the filter moved by, when it used laser odometry
+            (records between scans then keep the previous scan's pose).
     """
 
     times: np.ndarray
@@ -54,14 +59,18 @@ class SlamResult:
     snapshots: list = field(default_factory=list)
     dropped_odometry: list = field(default_factory=list)
     pose_covariances: np.ndarray | None = None
+    laser_odometry: LaserOdometry | None = None
 
 
 def run_fastslam(course_log: log.CourseLog, params: FastSLAMParams | None = None,
                  corner_params: CornerParams | None = None, geometry: BeamGeometry = EXERCISE_CONVENTION,
                  start_pose=(0.0, 0.0, 0.0), progress: bool = True, snapshot_every: int = 0,
-                 jump_tolerance: float = math.inf, identify=None) -> SlamResult:
+                 jump_tolerance: float = math.inf, identify=None, laser: LaserOdometry | None = None) -> SlamResult:
     """FastSLAM over every record of ``course_log``; odometry records travelling more than
     ``jump_tolerance`` metres are left out (listed in ``SlamResult.dropped_odometry``).
+
+    With ``laser`` (the log's laser odometry) the particles move by its increment at each scan and
+    odometry records move nothing.
 
     ``identify(record_index, observations (K, 2)) -> ids (K,)`` names the landmark each scan
     observation is (for ``association="known"`` on scan logs; landmark records carry their own).
@@ -74,19 +83,24 @@ def run_fastslam(course_log: log.CourseLog, params: FastSLAMParams | None = None
     pose_covariances = np.empty((count, 3, 3))
     reports, snapshots, dropped = [], [], []
     records = list(course_log.records())
+    laser_increments = dict(zip(laser.scan_records, laser.increments)) if laser is not None else {}
     bar = tqdm(total=count, desc="FastSLAM", unit="record", disable=not progress)
     position = 0
     while position < count:
         record = records[position]
         started = time.perf_counter()
         if isinstance(record, log.OdometryRecord):
-            if abs(record.distance) > jump_tolerance:
+            if laser is not None:  # the laser odometry's increment at the next scan holds this motion
+                pass
+            elif abs(record.distance) > jump_tolerance:
                 dropped.append(record)
             else:
                 slam.predict(record.distance, record.turn)
             done = [record]
         else:
             if isinstance(record, log.ScanRecord):
+                if laser is not None:
+                    slam.predict_relative(laser_increments[record.index])
                 done = [record]
                 z, covariances, ids = _scan_observations(extractor, record)
                 if identify is not None:
@@ -108,7 +122,7 @@ def run_fastslam(course_log: log.CourseLog, params: FastSLAMParams | None = None
     bar.close()
     landmarks, covariances = slam.landmarks()
     return SlamResult(course_log.times, mean_poses, best_poses, landmarks, covariances, step_seconds, reports,
-                      slam.resamplings, slam, snapshots, dropped, pose_covariances)
+                      slam.resamplings, slam, snapshots, dropped, pose_covariances, laser)
 
 
 def _scan_observations(extractor: CornerExtractor, record: log.ScanRecord):
@@ -134,11 +148,12 @@ def slam_on_file(path: str | Path, config: SlamConfig | None = None, progress: b
     config = config or SlamConfig()
     course_log = log.read(path)
     geometry, _ = resolve_geometry(path, config.sensor.as_dict())
+    laser = laser_odometry(course_log, geometry, config.scan_matching) if config.scan_matching.enabled else None
     identify = None
     if config.fastslam.association == "known" and course_log.is_scan.any():
         identify = truth_identities(path, config.evaluation.match_radius)
     return run_fastslam(course_log, config.fastslam, config.corners, geometry, start_pose(path), progress,
-                        snapshot_every, config.odometry.jump_tolerance, identify)
+                        snapshot_every, config.odometry.jump_tolerance, identify, laser)
 
 
 def truth_identities(path: str | Path, radius: float):
@@ -206,12 +221,13 @@ class EvaluationParams:
 @dataclass(frozen=True)
 class SlamConfig:
     """Everything ``mazeslam slam`` needs; TOML sections ``[fastslam]``, ``[corners]`` (with
-    ``[corners.lines]``), ``[sensor]``, ``[odometry]`` and ``[evaluation]``."""
+    ``[corners.lines]``), ``[sensor]``, ``[odometry]``, ``[scan_matching]`` and ``[evaluation]``."""
 
     fastslam: FastSLAMParams = field(default_factory=FastSLAMParams)
     corners: CornerParams = field(default_factory=CornerParams)
     sensor: SensorOverrides = field(default_factory=SensorOverrides)
     odometry: OdometryCleaning = field(default_factory=OdometryCleaning)
+    scan_matching: ScanMatchParams = field(default_factory=ScanMatchParams)
     evaluation: EvaluationParams = field(default_factory=EvaluationParams)
 
 

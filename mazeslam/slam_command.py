@@ -38,6 +38,11 @@ def run_slam_command(log_file, config_path, out_dir, filter_changes: dict | None
              f"FastSLAM: {config.fastslam.NPARTICLES} particles, {result.resamplings} resamplings, "
              f"{len(result.landmarks)} landmarks in the best particle's map, "
              f"{result.step_seconds.sum():.2f} s ({course_log.duration / max(result.step_seconds.sum(), 1e-9):.0f}x real time)"]
+    if result.laser_odometry is not None:
+        laser = result.laser_odometry
+        lines.append(f"Laser odometry: {int(laser.accepted.sum())} of {len(laser.accepted) - 1} scan-to-scan matches "
+                     f"accepted, {int((~laser.had_odometry[1:]).sum())} intervals without odometry records "
+                     "(matched by correlative search)")
     if not origin.startswith("sidecar") and course_log.is_scan.sum() > 1:
         warning = convention_warning(course_log, geometry, config.corners.min_range, config.corners.max_range,
                                      config.odometry.jump_tolerance)
@@ -60,7 +65,8 @@ def run_slam_command(log_file, config_path, out_dir, filter_changes: dict | None
              "dropped_odometry_lines": [int(course_log.line_numbers[r.index]) for r in result.dropped_odometry]}
     if evaluation is not None:
         table, map_errors = evaluation
-        lines += ["Errors against ground truth: ATE [m] (aligned: after the best rigid motion), RPE over "
+        scored = "at the scans (laser odometry: no pose between scans)" if result.laser_odometry is not None else "at every record"
+        lines += [f"Errors against ground truth {scored}: ATE [m] (aligned: after the best rigid motion), RPE over "
                   f"{slam_report.RPE_DISTANCE} m of path [m, rad], NEES of the pose (consistent: 3):",
                   table.to_markdown(floatfmt=".4f")]
         truth_tum = Path(out_dir) / "truth.tum"

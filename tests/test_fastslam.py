@@ -189,3 +189,17 @@ def test_fastslam2_keeps_more_particles_alive(default_run):
     runs = {v: slam_on_file(default_run.log_path, SlamConfig(fastslam=FastSLAMParams(version=v)), progress=False)
             for v in (1, 2)}
     assert runs[2].resamplings < 0.6 * runs[1].resamplings
+
+
+def test_fastslam2_carries_the_spread_fastslam1_draws_for_laser_odometry():
+    """Three turning relative motions: FastSLAM 2.0's linearised covariance (before a scan draws
+    the poses) matches the spread of FastSLAM 1.0's particles, which draw the same noise."""
+    steps = [np.array([1.0, 0.1, 0.4]), np.array([0.8, -0.05, -0.3]), np.array([1.2, 0.0, 0.6])]
+    noise = dict(sigmaX=0.05, sigmaTH=0.05, sigmaTH_drive=0.02)
+    drawn = FastSLAM(FastSLAMParams(NPARTICLES=20000, version=1, seed=3, **noise), start_pose=(1.0, -1.0, 0.3))
+    carried = FastSLAM(FastSLAMParams(NPARTICLES=2, version=2, **noise), start_pose=(1.0, -1.0, 0.3))
+    for step in steps:
+        drawn.predict_relative(step)
+        carried.predict_relative(step)
+    assert carried.poses[0] == pytest.approx(drawn.poses.mean(axis=0), abs=0.01)
+    assert carried.pose_covariances[0] == pytest.approx(np.cov(drawn.poses.T), abs=2e-4, rel=0.1)

@@ -1,7 +1,7 @@
 import numpy as np
 import pytest
 
-from mazeslam.filters.motion import predict_odometry
+from mazeslam.filters.motion import predict_odometry, predict_relative, relative_motion_covariance
 
 
 def test_standing_still_moves_no_particle():
@@ -31,3 +31,21 @@ def test_mean_motion_follows_the_odometry():
     moved = predict_odometry(start, 0.1, 0.0, 0.005, 0.03, 0.12, rng)
     assert moved[:, 0].mean() == pytest.approx(1.0, abs=2e-4)
     assert moved[:, 1].mean() == pytest.approx(2.1, abs=2e-4)
+
+
+def test_relative_motion_covariance_in_the_filters_units():
+    covariance = relative_motion_covariance(np.array([3.0, 4.0, -0.5]), 0.1, 0.2, 0.05)
+    # d = 5 m: position 0.1^2 * 5 along and across; heading 0.2^2 * 0.5 + 0.05^2 * 5
+    assert np.diag(covariance) == pytest.approx([0.05, 0.05, 0.02 + 0.0125])
+    assert np.count_nonzero(covariance - np.diag(np.diag(covariance))) == 0
+
+
+def test_relative_prediction_spreads_as_its_covariance_in_the_robot_frame():
+    rng = np.random.default_rng(1)
+    start = np.tile([1.0, 2.0, np.pi / 2], (20000, 1))  # facing +y: the robot's x is the world's y
+    covariance = np.diag([0.04, 0.01, 0.0025])
+    moved = predict_relative(start, np.array([1.0, 0.0, 0.0]), covariance, rng)
+    assert moved[:, 1].mean() == pytest.approx(3.0, abs=0.005)
+    assert moved[:, 1].std() == pytest.approx(0.2, rel=0.03)  # along the heading
+    assert moved[:, 0].std() == pytest.approx(0.1, rel=0.03)  # across it
+    assert moved[:, 2].std() == pytest.approx(0.05, rel=0.03)

@@ -64,3 +64,17 @@ def test_command_prints_fastslam_settings_or_names_the_missing_truth(default_run
     bare.write_text(default_run.log_path.read_text())
     result = CliRunner().invoke(main, ["odometry-noise", str(bare)])
     assert result.exit_code != 0 and "no truth sidecar" in result.output
+
+
+def test_laser_odometry_errors_by_hand():
+    from mazeslam.evaluation.odometry_noise import laser_stretch_errors
+    from mazeslam.filters.scan_matching import LaserOdometry
+
+    truth = np.array([[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [1.0, 1.0, np.pi / 2]])  # 1 m east, then 1 m north facing north
+    increments = np.array([[0.0, 0.0, 0.0], [0.9, 0.0, 0.01], [0.0, 1.0, np.pi / 2]])  # the first step 10 cm short
+    laser = LaserOdometry(np.arange(3), increments, np.zeros((3, 3)), np.ones(3, bool), np.ones(3, bool), np.ones(3))
+    rows = laser_stretch_errors(laser, truth)
+    # second interval in the robot frame at (1, 0, 0): the true step is (0, 1, pi/2), laser's exact
+    assert rows == pytest.approx(np.array([[0.9, 0.01, 0.1, -0.01], [1.0, np.pi / 2, 0.0, 0.0]]), abs=1e-12)
+    with pytest.raises(ValueError, match="one pose per scan"):
+        laser_stretch_errors(laser, truth[:2])

@@ -15,6 +15,9 @@ error are fitted to the model by non-negative least squares:
 gives ``sigmaX^2`` (the T term absorbs the small shift of the axle while turning on the spot, which
 the filter's model leaves out). D and T are the stretch's summed |d| and |dtheta|.
 Systematic errors (a wrong wheel radius) count as noise here, as they must for the filter.
+
+Laser odometry (``mazeslam.filters.scan_matching``) is measured the same way, interval by interval
+between scans (``laser_stretch_errors``): D and T are then the interval's matched distance and turn.
 """
 
 from __future__ import annotations
@@ -26,6 +29,7 @@ import numpy as np
 from scipy.optimize import nnls
 
 from mazeslam.filters.motion import dead_reckoning
+from mazeslam.filters.scan_matching import LaserOdometry
 from mazeslam.geometry import relative, wrap_angle
 from mazeslam.log import CourseLog
 
@@ -77,16 +81,46 @@ def stretch_errors(course_log: CourseLog, truth: np.ndarray) -> np.ndarray:
         if moved == 0.0 and turned == 0.0:
             continue
         odometry_step = relative(reckoned[start], reckoned[end])
-        true_step = relative(truth[start], truth[end])
-        heading = math.atan2(odometry_step[1], odometry_step[0]) if moved > 0 else 0.0
-        along = (true_step[0] - odometry_step[0]) * math.cos(heading) + (true_step[1] - odometry_step[1]) * math.sin(heading)
-        rows.append((moved, turned, along, wrap_angle(true_step[2] - odometry_step[2])))
+        rows.append(_error_row(moved, turned, odometry_step, relative(truth[start], truth[end])))
     return np.array(rows).reshape(-1, 4)
+
+
+def laser_stretch_errors(laser: LaserOdometry, truth: np.ndarray) -> np.ndarray:
+    """Laser odometry's errors over each interval between consecutive scans.
+
+    Args:
+        laser: the laser odometry of a log.
+        truth: (S, 3) true pose at each of its scans, world frame (m, rad).
+
+    Returns:
+        (S - 1, 4) rows ``[D, T, e_along, e_theta]`` as in ``stretch_errors``, D and T the matched
+        distance and turn.
+    """
+    truth = np.asarray(truth, dtype=float)
+    if truth.shape != (len(laser.increments), 3):
+        raise ValueError(f"truth must hold one pose per scan: {len(laser.increments)} x 3, got {truth.shape}")
+    rows = [_error_row(math.hypot(step[0], step[1]), abs(step[2]), step, relative(truth[k - 1], truth[k]))
+            for k, step in enumerate(laser.increments) if k]
+    return np.array(rows).reshape(-1, 4)
+
+
+def _error_row(moved: float, turned: float, measured_step: np.ndarray, true_step: np.ndarray) -> tuple:
+    """``(D, T, e_along, e_theta)`` of one stretch: the position error along the direction the
+    measured step travelled (m) and the heading error (rad)."""
+    heading = math.atan2(measured_step[1], measured_step[0]) if moved > 0 else 0.0
+    along = ((true_step[0] - measured_step[0]) * math.cos(heading)
+             + (true_step[1] - measured_step[1]) * math.sin(heading))
+    return moved, turned, along, wrap_angle(true_step[2] - measured_step[2])
 
 
 def measure_odometry_noise(course_log: CourseLog, truth: np.ndarray) -> OdometryNoise:
     """Fit the filter's odometry noise parameters to a log with truth (see the module docstring)."""
-    errors = stretch_errors(course_log, truth)
+    return fit_noise(stretch_errors(course_log, truth))
+
+
+def fit_noise(errors: np.ndarray) -> OdometryNoise:
+    """The noise parameters that fit the stretch errors (K, 4) ``[D, T, e_along, e_theta]`` by
+    non-negative least squares (see the module docstring)."""
     moved, turned, along, heading = errors.T
     if not (moved > 0).any():
         raise ValueError("the log never drives: the distance noise cannot be measured")

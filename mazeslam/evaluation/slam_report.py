@@ -45,21 +45,29 @@ def error_table(estimates: dict[str, np.ndarray], truth: np.ndarray) -> pd.DataF
 
 def evaluate_against_truth(path, course_log: log.CourseLog, result: SlamResult, start,
                            match_radius: float = 0.05) -> tuple[pd.DataFrame, dict] | None:
-    """The ATE table (dead reckoning and FastSLAM) and the map errors, when the log has truth
-    sidecars: as estimated, and after moving the map by the rigid motion that best aligns the
-    estimated trajectory with the true one (the map shares the trajectory's frame)."""
+    """The ATE table (dead reckoning, laser odometry when the filter used it, and FastSLAM) and the
+    map errors, when the log has truth sidecars: as estimated, and after moving the map by the
+    rigid motion that best aligns the estimated trajectory with the true one (the map shares the
+    trajectory's frame). Every record is scored, or only the scans when the filter moved by laser
+    odometry (it knows no pose between two scans)."""
     truth_file, map_file = sidecars.truth_path(path), sidecars.map_path(path)
     if not truth_file.exists():
         return None
     _, truth = sidecars.read_truth(truth_file)
-    estimates = {"dead reckoning": dead_reckoning(course_log, start), "FastSLAM (mean)": result.mean_poses,
-                 "FastSLAM (best particle)": result.best_poses}
+    laser = result.laser_odometry
+    rows = laser.scan_records if laser is not None else np.arange(len(course_log))
+    estimates = {"dead reckoning": dead_reckoning(course_log, start)[rows]}
+    if laser is not None:
+        estimates["laser odometry"] = laser.poses(start)
+    estimates.update({"FastSLAM (mean)": result.mean_poses[rows], "FastSLAM (best particle)": result.best_poses[rows]})
+    truth = truth[rows]
     corners = sidecars.read_map(map_file)["corners"] if map_file.exists() else np.empty((0, 2))
-    aligned = apply_se2(align_se2(result.mean_poses, truth), result.landmarks) if len(result.landmarks) else result.landmarks
+    aligned = (apply_se2(align_se2(result.mean_poses[rows], truth), result.landmarks) if len(result.landmarks)
+               else result.landmarks)
     table = error_table(estimates, truth)
     table["mean_nees"] = np.nan
-    for name, covariances in (("FastSLAM (mean)", result.pose_covariances),):
-        table.loc[name, "mean_nees"] = float(np.nanmean(normalized_estimation_error(result.mean_poses, covariances, truth)))
+    nees = normalized_estimation_error(result.mean_poses[rows], result.pose_covariances[rows], truth)
+    table.loc["FastSLAM (mean)", "mean_nees"] = float(np.nanmean(nees))
     return table, {"as estimated": map_error(result.landmarks, corners, match_radius),
                    "aligned": map_error(aligned, corners, match_radius)}
 

@@ -29,8 +29,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from mazeslam.config import require
-from mazeslam.filters.motion import predict_odometry
-from mazeslam.geometry import advance_pose, wrap_angle
+from mazeslam.filters.motion import predict_odometry, predict_relative, relative_motion_covariance
+from mazeslam.geometry import advance_pose, compose, wrap_angle
 
 LOG_TWO_PI = math.log(2 * math.pi)
 
@@ -160,6 +160,30 @@ class FastSLAM:
         motion = np.diag([p.sigmaX**2 * abs(distance), p.sigmaTH**2 * abs(turn) + p.sigmaTH_drive**2 * abs(distance)])
         self.pose_covariances = f @ self.pose_covariances @ np.swapaxes(f, 1, 2) + v @ motion @ np.swapaxes(v, 1, 2)
         self.poses = advance_pose(self.poses, distance, turn)
+
+    def predict_relative(self, increment) -> None:
+        """Move every particle by a relative motion ``increment`` (dx, dy, dtheta) given in its own
+        robot frame (laser odometry), with the noise of ``relative_motion_covariance``.
+
+        As in ``predict``, FastSLAM 1.0 draws the noise now and FastSLAM 2.0 accumulates the
+        motion's covariance for the next scan's proposal.
+        """
+        p = self.params
+        increment = np.asarray(increment, dtype=float)
+        motion = relative_motion_covariance(increment, p.sigmaX, p.sigmaTH, p.sigmaTH_drive)
+        if p.version == 1:
+            self.poses = predict_relative(self.poses, increment, motion, self.rng)
+            return
+        cos_t, sin_t = np.cos(self.poses[:, 2]), np.sin(self.poses[:, 2])
+        count = len(self.poses)
+        # Jacobians of compose(pose, increment) with respect to the pose (F) and the increment (V).
+        f = np.tile(np.eye(3), (count, 1, 1))
+        f[:, 0, 2] = -sin_t * increment[0] - cos_t * increment[1]
+        f[:, 1, 2] = cos_t * increment[0] - sin_t * increment[1]
+        v = np.tile(np.eye(3), (count, 1, 1))
+        v[:, 0, 0], v[:, 0, 1], v[:, 1, 0], v[:, 1, 1] = cos_t, -sin_t, sin_t, cos_t
+        self.pose_covariances = f @ self.pose_covariances @ np.swapaxes(f, 1, 2) + v @ motion @ np.swapaxes(v, 1, 2)
+        self.poses = compose(self.poses, increment)
 
     # -- observation model --------------------------------------------------------------------
     def _used_slots(self) -> int:

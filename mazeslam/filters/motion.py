@@ -11,13 +11,17 @@ The variances grow with the motion, like wheel slip does (a random walk: after t
 error has standard deviation proportional to sqrt(d)). The exercise adds a fixed amount per
 record instead, so its cloud spreads even while the robot stands still; here a record that
 reports no motion moves no particle.
+
+Laser odometry (``mazeslam.filters.scan_matching``) reports whole poses ``(dx, dy, dth)`` in the
+robot frame instead; ``predict_relative`` moves particles by those, with the same noise terms:
+sigmaX along and across the heading, sigmaTH and sigmaTH_drive on the heading.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-from mazeslam.geometry import advance_pose
+from mazeslam.geometry import advance_pose, compose
 from mazeslam.log import CourseLog
 
 
@@ -40,6 +44,24 @@ def predict_odometry(poses: np.ndarray, distance: float, turn: float, sigma_x: f
     turn_std = np.sqrt(sigma_th**2 * abs(turn) + sigma_th_drive**2 * abs(distance))
     noise = rng.standard_normal((2, count))
     return advance_pose(poses, distance + distance_std * noise[0], turn + turn_std * noise[1])
+
+
+def relative_motion_covariance(increment: np.ndarray, sigma_x: float, sigma_th: float,
+                               sigma_th_drive: float) -> np.ndarray:
+    """Covariance (3, 3) of a relative motion ``increment`` (dx, dy, dth) in the robot frame it
+    starts from: ``sigma_x^2 d`` along and across the heading, ``sigma_th^2 |dth| + sigma_th_drive^2 d``
+    on the heading, d the distance travelled (m). Units as in ``predict_odometry``."""
+    distance = float(np.hypot(increment[0], increment[1]))
+    position = sigma_x**2 * distance
+    return np.diag([position, position, sigma_th**2 * abs(increment[2]) + sigma_th_drive**2 * distance])
+
+
+def predict_relative(poses: np.ndarray, increment: np.ndarray, covariance: np.ndarray,
+                     rng: np.random.Generator) -> np.ndarray:
+    """Particles ``poses`` (P, 3) moved by a relative motion ``increment`` (3,) (robot frame) with
+    noise drawn from ``covariance`` (3, 3), one draw per particle. Returns the new poses (P, 3)."""
+    noise = rng.multivariate_normal(np.zeros(3), covariance, size=len(poses), method="eigh")
+    return compose(poses, np.asarray(increment, dtype=float) + noise)
 
 
 def dead_reckoning(log: CourseLog, start_pose=(0.0, 0.0, 0.0)) -> np.ndarray:
