@@ -41,8 +41,8 @@ def run_slam_command(log_file, config_path, out_dir, filter_changes: dict | None
     if result.laser_odometry is not None:
         laser = result.laser_odometry
         lines.append(f"Laser odometry: {int(laser.accepted.sum())} of {len(laser.accepted) - 1} scan-to-scan matches "
-                     f"accepted, {int((~laser.had_odometry[1:]).sum())} intervals without odometry records "
-                     "(matched by correlative search)")
+                     "accepted; intervals without odometry records (matched by correlative search): "
+                     f"{int((~laser.had_odometry[1:]).sum())}")
     if not origin.startswith("sidecar") and course_log.is_scan.sum() > 1:
         warning = convention_warning(course_log, geometry, config.corners.min_range, config.corners.max_range,
                                      config.odometry.jump_tolerance)
@@ -60,17 +60,21 @@ def run_slam_command(log_file, config_path, out_dir, filter_changes: dict | None
                  f"{checks['nearest_landmarks_m']:.3f} m apart; largest path step between records "
                  f"{checks['largest_path_step_m']:.3f} m")
     evaluation = slam_report.evaluate_against_truth(log_file, course_log, result, start, match_radius)
+    world = sidecars.read_map(sidecars.map_path(log_file)) if sidecars.map_path(log_file).exists() else {}
     extra = {"source": str(log_file), "beam_geometry": geometry.to_dict(), "start_pose": start.tolist(),
              "parameters": jsonable(dataclasses.asdict(config)), "consistency": checks,
              "dropped_odometry_lines": [int(course_log.line_numbers[r.index]) for r in result.dropped_odometry]}
     if evaluation is not None:
         table, map_errors = evaluation
         scored = "at the scans (laser odometry: no pose between scans)" if result.laser_odometry is not None else "at every record"
-        lines += [f"Errors against ground truth {scored}: ATE [m] (aligned: after the best rigid motion), RPE over "
+        against = world.get("truth_kind", "ground truth")
+        lines += [f"Errors against {against}, {scored}: ATE [m] (aligned: after the best rigid motion), RPE over "
                   f"{slam_report.RPE_DISTANCE} m of path [m, rad], NEES of the pose (consistent: 3):",
                   table.to_markdown(floatfmt=".4f")]
         truth_tum = Path(out_dir) / "truth.tum"
-        for name, errors in map_errors.items():
+        if not len(world.get("corners", [])):
+            lines.append("Map: no true corners beside the log, the map is not scored")
+        for name, errors in map_errors.items() if len(world.get("corners", [])) else ():
             lines.append(f"Map ({name}): {errors['matched']} landmarks within {match_radius:g} m of a true one, "
                          f"RMSE {errors['rmse']:.4f} m, precision {errors['precision']:.2f}, recall {errors['recall']:.2f}")
         extra["ate"] = table.reset_index().to_dict(orient="records")
@@ -82,7 +86,6 @@ def run_slam_command(log_file, config_path, out_dir, filter_changes: dict | None
         sidecars.write_tum(truth_tum, *sidecars.read_truth(sidecars.truth_path(log_file)))
         paths["truth_tum"] = truth_tum
     truth = sidecars.read_truth(sidecars.truth_path(log_file))[1] if evaluation is not None else None
-    world = sidecars.read_map(sidecars.map_path(log_file)) if sidecars.map_path(log_file).exists() else {}
     points = slam_report.scan_points_world(course_log, result.mean_poses, geometry, config.corners.min_range,
                                            config.corners.max_range)
     walls = world.get("walls")

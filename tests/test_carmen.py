@@ -132,3 +132,40 @@ def dataclass_slice(course_log, start, stop):
     from mazeslam.log import CourseLog
 
     return CourseLog(course_log.times[start:stop], course_log.flags[start:stop], course_log.values[start:stop])
+
+
+def imported(name, tmp_path):
+    """A CARMEN building imported as a course log (skips without the shared data)."""
+    from mazeslam.imports.carmen import import_carmen
+
+    source = CARMEN / f"{name}-corrected.log.gz"
+    if not source.exists():
+        pytest.skip(f"CARMEN log not found at {source} (the shared data folder is absent)")
+    import_carmen(source, tmp_path / f"{name}.log")
+    return tmp_path / f"{name}.log"
+
+
+@pytest.mark.parametrize("name, scans", [("freiburg-101", 150), ("orebro", 80)])
+def test_laser_odometry_on_real_scans_beats_the_wheels(name, scans, tmp_path):
+    """The first ``scans`` scans of a real building: laser odometry against the reference poses
+    ends up well inside the wheel odometry's error (orebro's log has no wheel odometry at all)."""
+    from mazeslam import log, sidecars
+    from mazeslam.evaluation.metrics import absolute_trajectory_error
+    from mazeslam.filters.motion import dead_reckoning
+    from mazeslam.filters.scan_matching import laser_odometry
+    from mazeslam.scans import resolve_geometry
+    from mazeslam.slam import load_slam_config
+
+    path = imported(name, tmp_path)
+    full = log.read(path)
+    stop = np.flatnonzero(full.is_scan)[scans - 1] + 1
+    course_log = dataclass_slice(full, 0, stop)
+    reference = sidecars.read_truth(sidecars.truth_path(path))[1][:stop]
+    start = sidecars.read_map(sidecars.map_path(path))["start_pose"]
+    geometry, _ = resolve_geometry(path)
+    laser = laser_odometry(course_log, geometry, load_slam_config(PROJECT_ROOT / "configs" / "carmen.toml").scan_matching)
+    at_scans = reference[laser.scan_records]
+    wheels = absolute_trajectory_error(dead_reckoning(course_log, start)[laser.scan_records], at_scans)["rmse"]
+    lasers = absolute_trajectory_error(laser.poses(start), at_scans)["rmse"]
+    assert laser.accepted[1:].mean() > 0.9
+    assert lasers < wheels / 3

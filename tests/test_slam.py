@@ -81,3 +81,12 @@ def test_known_association_without_truth_is_refused(tmp_path, default_run):
     config = SlamConfig(fastslam=dataclasses.replace(SlamConfig().fastslam, association="known"))
     with pytest.raises(ValueError, match="needs the truth and map sidecars"):
         slam_on_file(copy, config, progress=False)
+
+
+def test_the_written_out_default_config_is_the_defaults_in_code():
+    from conftest import PROJECT_ROOT
+    from mazeslam.slam import SlamConfig, load_slam_config
+
+    written = load_slam_config(PROJECT_ROOT / "configs" / "fastslam.toml")
+    assert written.fastslam == SlamConfig().fastslam
+    assert written.scan_matching == SlamConfig().scan_matching
