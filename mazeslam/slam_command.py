@@ -91,9 +91,15 @@ def run_slam_command(log_file, config_path, out_dir, filter_changes: dict | None
     walls = world.get("walls")
     paths["figure"] = slam_report.plot_slam(Path(out_dir) / "slam.png", result, points, truth, walls,
                                             title=f"{Path(log_file).name}: FastSLAM, {config.fastslam.NPARTICLES} particles",
-                                            true_landmarks=world.get("corners"))
+                                            true_landmarks=world.get("corners"),
+                                            truth_label=_truth_label(world))
     if animate:
         paths["animation"] = slam_report.animate_slam(Path(out_dir) / "slam.gif", result, points, truth, walls)
     lines.append("wrote " + ", ".join(str(p) for p in paths.values()))
     return lines
 
+
+
+def _truth_label(world: dict) -> str:
+    """How a figure names the path of the truth sidecar: a reference (CARMEN's corrected poses) or the true path."""
+    return "reference path" if world.get("truth_kind", "").startswith("reference") else "true path"

@@ -7,7 +7,8 @@ the family: laser odometry, FastSLAM 2.0, 100 particles) under ``--seeds`` filte
 the scans against the reference poses (gmapping's corrected poses: a reference, not ground truth;
 the log has no other pose to score against): the ATE of the wheel odometry, of the laser odometry
 alone and of FastSLAM (median and worst over the seeds), with and without SE(2) alignment;
-landmarks, run time, particles; the map of the median seed drawn over the scans.
+landmarks, run time, particles (results/table.md). Figures in docs/img/carmen/: the median seed's
+map drawn over the scans, and its scans beside the picture of the map that comes with the log.
 """
 
 from __future__ import annotations
@@ -18,21 +19,26 @@ import time
 from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 
-import numpy as np
-import pandas as pd
+import matplotlib
 
-from mazeslam import log, sidecars
-from mazeslam.evaluation import slam_report
-from mazeslam.evaluation.metrics import absolute_trajectory_error
-from mazeslam.filters.motion import dead_reckoning
-from mazeslam.imports.carmen import import_carmen
-from mazeslam.scans import resolve_geometry
-from mazeslam.slam import load_slam_config, slam_on_file
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+import pandas as pd  # noqa: E402
+
+from mazeslam import log, sidecars  # noqa: E402
+from mazeslam.evaluation import slam_report  # noqa: E402
+from mazeslam.evaluation.metrics import absolute_trajectory_error  # noqa: E402
+from mazeslam.filters.motion import dead_reckoning  # noqa: E402
+from mazeslam.imports.carmen import import_carmen  # noqa: E402
+from mazeslam.scans import resolve_geometry  # noqa: E402
+from mazeslam.slam import load_slam_config, slam_on_file  # noqa: E402
 
 HERE = Path(__file__).resolve().parent
 PROJECT = HERE.parents[1]
 DATA = PROJECT.parent / "shared" / "data" / "carmen"
 CONFIG = PROJECT / "configs" / "carmen.toml"
+FIGURES = PROJECT / "docs" / "img" / "carmen"
 LOGS = ["aces", "csail", "edmonton", "fhw", "freiburg-079", "freiburg-101", "orebro", "seattle"]
 
 
@@ -80,12 +86,30 @@ def evaluate(name: str, seeds: int, out: Path) -> dict:
     geometry, _ = resolve_geometry(course)
     points = slam_report.scan_points_world(course_log, median["result"].mean_poses, geometry, 0.1,
                                            config.corners.max_range)
-    slam_report.plot_slam(out / f"{name}.png", median["result"], points[::5], reference, None,
-                          title=f"{name}: FastSLAM on laser odometry (filter seed {median['seed']}, the median of {seeds})")
+    title = f"{name}: FastSLAM on laser odometry (filter seed {median['seed']}, the median of {seeds})"
+    slam_report.plot_slam(FIGURES / f"{name}.png", median["result"], points[::5], reference[scans], None,
+                          title=title, truth_label="reference path (gmapping)")
+    beside_the_reference_picture(FIGURES / f"{name}_vs_reference.png", points, DATA / f"{name}-corrected.png", name)
     for suffix in (".log", ".truth.csv", ".map.json"):
         course.with_name(course.stem + suffix).unlink()
     print({k: round(v, 2) if isinstance(v, float) else v for k, v in row.items()}, flush=True)
     return row
+
+
+def beside_the_reference_picture(path: Path, points: np.ndarray, picture: Path, name: str) -> None:
+    """Our scans, placed by FastSLAM, beside the map picture that comes with the log."""
+    fig, (ours, theirs) = plt.subplots(1, 2, figsize=(11, 5))
+    ours.plot(points[:, 0], points[:, 1], ",", color="black", alpha=0.5)
+    ours.set_aspect("equal")
+    ours.set_title(f"{name}: scans placed by FastSLAM")
+    ours.set_xlabel("x [m]")
+    ours.set_ylabel("y [m]")
+    theirs.imshow(plt.imread(picture), cmap="gray")
+    theirs.set_title("the map picture beside the log")
+    theirs.axis("off")
+    fig.tight_layout()
+    fig.savefig(path, dpi=90)
+    plt.close(fig)
 
 
 def main():
@@ -95,6 +119,7 @@ def main():
     args = parser.parse_args()
     out = HERE / "results"
     out.mkdir(exist_ok=True)
+    FIGURES.mkdir(parents=True, exist_ok=True)
     with ProcessPoolExecutor(args.workers) as pool:
         rows = list(pool.map(evaluate, LOGS, [args.seeds] * len(LOGS), [out] * len(LOGS)))
     table = pd.DataFrame(rows)

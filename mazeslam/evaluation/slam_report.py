@@ -105,9 +105,11 @@ def scan_points_world(course_log: log.CourseLog, poses: np.ndarray, geometry: Be
 
 
 def plot_slam(path, result: SlamResult, points: np.ndarray, truth: np.ndarray | None = None,
-              walls: np.ndarray | None = None, title: str = "", true_landmarks: np.ndarray | None = None) -> Path:
+              walls: np.ndarray | None = None, title: str = "", true_landmarks: np.ndarray | None = None,
+              truth_label: str = "true path") -> Path:
     """The exercise's figure: best particle's map with 2-sigma ellipses, particles in red, scan
-    points in black, the estimated path; with truth, the true path, walls and landmarks too."""
+    points in black, the estimated path; with truth, the true path (``truth_label``: a reference
+    path is not truth), walls and landmarks too."""
     fig, ax = plt.subplots(figsize=(9, 7))
     if walls is not None:
         for x1, y1, x2, y2 in walls:
@@ -115,7 +117,7 @@ def plot_slam(path, result: SlamResult, points: np.ndarray, truth: np.ndarray | 
     if len(points):
         ax.plot(points[:, 0], points[:, 1], ".", color="black", markersize=0.8, alpha=0.4, label="scan points")
     if truth is not None:
-        ax.plot(truth[:, 0], truth[:, 1], color="tab:green", linewidth=1.2, label="true path")
+        ax.plot(truth[:, 0], truth[:, 1], color="tab:green", linewidth=1.2, label=truth_label)
     if true_landmarks is not None and len(true_landmarks):
         ax.plot(true_landmarks[:, 0], true_landmarks[:, 1], "o", color="tab:green", markersize=4,
                 markerfacecolor="none", label="true landmarks")
