@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import dataclasses
+import time
 from pathlib import Path
 
 from mazeslam import log, sidecars
@@ -33,15 +34,17 @@ def run_slam_command(log_file, config_path, out_dir, filter_changes: dict | None
     start = start_pose(log_file)
     updates = int(course_log.is_scan.sum() + course_log.is_landmark.sum())
     every = max(1, updates // ANIMATION_FRAMES) if animate else 0  # frames for the GIF, at most ~ANIMATION_FRAMES
+    began = time.perf_counter()
     result = slam_on_file(log_file, config, progress, snapshot_every=every)
+    matching_seconds = time.perf_counter() - began - result.step_seconds.sum()
     lines = [f"{log_file}: {len(course_log)} records, {len(result.reports)} observation updates; beam geometry from {origin}",
              f"FastSLAM: {config.fastslam.NPARTICLES} particles, {result.resamplings} resamplings, "
              f"{len(result.landmarks)} landmarks in the best particle's map, "
              f"{result.step_seconds.sum():.2f} s ({course_log.duration / max(result.step_seconds.sum(), 1e-9):.0f}x real time)"]
     if result.laser_odometry is not None:
         laser = result.laser_odometry
-        lines.append(f"Laser odometry: {int(laser.accepted.sum())} of {len(laser.accepted) - 1} scan-to-scan matches "
-                     "accepted; intervals without odometry records (matched by correlative search): "
+        lines.append(f"Laser odometry ({matching_seconds:.1f} s): {int(laser.accepted.sum())} of {len(laser.accepted) - 1} "
+                     "scan-to-scan matches accepted; intervals without odometry records (matched by correlative search): "
                      f"{int((~laser.had_odometry[1:]).sum())}")
     if not origin.startswith("sidecar") and course_log.is_scan.sum() > 1:
         warning = convention_warning(course_log, geometry, config.corners.min_range, config.corners.max_range,
