@@ -148,6 +148,9 @@ def slam_on_file(path: str | Path, config: SlamConfig | None = None, progress: b
     config = config or SlamConfig()
     course_log = log.read(path)
     geometry, _ = resolve_geometry(path, config.sensor.as_dict())
+    if config.scan_matching.enabled and (not course_log.is_scan.any() or course_log.is_landmark.any()):
+        raise ValueError(f"{path}: [scan_matching] needs a log of scans (laser odometry moves the filter scan to "
+                         "scan); this one has landmark records or no scans: turn it off")
     laser = laser_odometry(course_log, geometry, config.scan_matching) if config.scan_matching.enabled else None
     identify = None
     if config.fastslam.association == "known" and course_log.is_scan.any():

@@ -202,3 +202,14 @@ def test_mazeslam_slam_moves_by_laser_odometry_on_a_log_without_odometry(tmp_pat
     # Along the north wall the laser sees little across the room's length; one such step slides ~14 cm.
     assert ate["laser odometry"] < 0.15
     assert ate["FastSLAM (mean)"] < 0.2
+
+
+def test_laser_odometry_on_a_log_without_scans_is_refused(tmp_path):
+    from mazeslam import log
+    from mazeslam.slam import SlamConfig, slam_on_file
+
+    path = tmp_path / "odometry_only.log"
+    log.write(path, CourseLog(np.array([0.0, 1.0]), np.array([ODOMETRY, ODOMETRY]), np.array([[0.1, 0.0], [0.1, 0.1]])))
+    config = SlamConfig(scan_matching=ScanMatchParams(enabled=True))
+    with pytest.raises(ValueError, match=r"\[scan_matching\] needs a log of scans"):
+        slam_on_file(path, config, progress=False)
