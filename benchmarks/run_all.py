@@ -14,6 +14,7 @@ import bench_corners  # noqa: E402
 import bench_env  # noqa: E402
 import bench_fastslam  # noqa: E402
 import bench_laser  # noqa: E402
+import bench_scan_matching  # noqa: E402
 import bench_sweep  # noqa: E402
 import bench_simulation  # noqa: E402
 
@@ -24,6 +25,7 @@ def main() -> int:
                   pd.DataFrame([bench_corners.speed(Path(folder))])]
         tables += [pd.DataFrame([row]) for row in bench_fastslam.run()]
         tables += [pd.DataFrame([row]) for row in bench_sweep.run()]
+        tables += [pd.DataFrame([row]) for row in bench_scan_matching.run()]
         tables.append(pd.DataFrame([bench_env.run()]))
         for table in tables:
             print(table.set_index("benchmark").to_markdown(floatfmt=".3g"), end="\n\n")

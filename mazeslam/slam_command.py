@@ -40,7 +40,8 @@ def run_slam_command(log_file, config_path, out_dir, filter_changes: dict | None
     lines = [f"{log_file}: {len(course_log)} records, {len(result.reports)} observation updates; beam geometry from {origin}",
              f"FastSLAM: {config.fastslam.NPARTICLES} particles, {result.resamplings} resamplings, "
              f"{len(result.landmarks)} landmarks in the best particle's map, "
-             f"{result.step_seconds.sum():.2f} s ({course_log.duration / max(result.step_seconds.sum(), 1e-9):.0f}x real time)"]
+             f"{result.step_seconds.sum():.2f} s" + (f" ({course_log.duration / max(result.step_seconds.sum(), 1e-9):.0f}x real time)"
+                                                     if course_log.duration > 0 else " (the log's timestamps span no time)")]
     if result.laser_odometry is not None:
         laser = result.laser_odometry
         lines.append(f"Laser odometry ({matching_seconds:.1f} s): {int(laser.accepted.sum())} of {len(laser.accepted) - 1} "
