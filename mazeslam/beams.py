@@ -58,6 +58,15 @@ class BeamGeometry:
         k = np.arange(n_beams)
         return wrap_angle(self.first_beam_angle + self.direction * k * self.angle_step(n_beams))
 
+    def returns(self, ranges: np.ndarray, min_range: float = 0.0, max_range: float = np.inf) -> np.ndarray:
+        """A scan's returns within [min_range, max_range] (0 = no return is always left out) as
+        points (K, 2) in the robot frame, metres: the sensor's mounting offset included."""
+        ranges = np.asarray(ranges, dtype=float)
+        valid = (ranges > 0) & (ranges >= min_range) & (ranges <= max_range)
+        bearings = self.bearings(len(ranges))[valid]
+        return np.column_stack([self.mount_x + ranges[valid] * np.cos(bearings),
+                                self.mount_y + ranges[valid] * np.sin(bearings)])
+
     def to_dict(self) -> dict:
         return {
             "first_beam_angle": self.first_beam_angle,

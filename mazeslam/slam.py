@@ -90,12 +90,11 @@ def run_fastslam(course_log: log.CourseLog, params: FastSLAMParams | None = None
         record = records[position]
         started = time.perf_counter()
         if isinstance(record, log.OdometryRecord):
-            if laser is not None:  # the laser odometry's increment at the next scan holds this motion
-                pass
-            elif abs(record.distance) > jump_tolerance:
-                dropped.append(record)
-            else:
-                slam.predict(record.distance, record.turn)
+            if laser is None:  # else the laser odometry's increment at the next scan holds this motion
+                if abs(record.distance) > jump_tolerance:
+                    dropped.append(record)
+                else:
+                    slam.predict(record.distance, record.turn)
             done = [record]
         else:
             if isinstance(record, log.ScanRecord):
@@ -142,16 +141,23 @@ def _same_time_landmarks(records: list, position: int) -> list:
 
 
 def slam_on_file(path: str | Path, config: SlamConfig | None = None, progress: bool = True,
-                 snapshot_every: int = 0) -> SlamResult:
+                 snapshot_every: int = 0, laser: LaserOdometry | None = None) -> SlamResult:
     """``run_fastslam`` on a log file, with the beam geometry and start pose from its map sidecar
-    (the start pose is the origin for a log without one)."""
+    (the start pose is the origin for a log without one).
+
+    With ``[scan_matching] enabled`` the filter moves by the log's laser odometry: ``laser`` if
+    given (it does not depend on the filter's seed, so runs over several seeds can share it), else
+    matched here; without it, ``laser`` is not used."""
     config = config or SlamConfig()
     course_log = log.read(path)
     geometry, _ = resolve_geometry(path, config.sensor.as_dict())
     if config.scan_matching.enabled and (not course_log.is_scan.any() or course_log.is_landmark.any()):
         raise ValueError(f"{path}: [scan_matching] needs a log of scans (laser odometry moves the filter scan to "
                          "scan); this one has landmark records or no scans: turn it off")
-    laser = laser_odometry(course_log, geometry, config.scan_matching) if config.scan_matching.enabled else None
+    if not config.scan_matching.enabled:
+        laser = None
+    elif laser is None:
+        laser = laser_odometry(course_log, geometry, config.scan_matching)
     identify = None
     if config.fastslam.association == "known" and course_log.is_scan.any():
         identify = truth_identities(path, config.evaluation.match_radius)

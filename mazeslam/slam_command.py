@@ -76,9 +76,10 @@ def run_slam_command(log_file, config_path, out_dir, filter_changes: dict | None
                   f"{slam_report.RPE_DISTANCE} m of path [m, rad], NEES of the pose (consistent: 3):",
                   table.to_markdown(floatfmt=".4f")]
         truth_tum = Path(out_dir) / "truth.tum"
-        if not len(world.get("corners", [])):
+        has_corners = len(world.get("corners", [])) > 0
+        if not has_corners:
             lines.append("Map: no true corners beside the log, the map is not scored")
-        for name, errors in map_errors.items() if len(world.get("corners", [])) else ():
+        for name, errors in map_errors.items() if has_corners else ():
             lines.append(f"Map ({name}): {errors['matched']} landmarks within {match_radius:g} m of a true one, "
                          f"RMSE {errors['rmse']:.4f} m, precision {errors['precision']:.2f}, recall {errors['recall']:.2f}")
         extra["ate"] = table.reset_index().to_dict(orient="records")

@@ -54,12 +54,17 @@ def test_malformed_flaser_names_the_line(tmp_path):
         read_carmen(path)
 
 
+def carmen_source(name):
+    """The CARMEN log of building ``name``; skips the test without the shared data."""
+    source = CARMEN / f"{name}-corrected.log.gz"
+    if not source.exists():
+        pytest.skip(f"CARMEN log not found at {source} (the shared data folder is absent)")
+    return source
+
+
 @pytest.mark.parametrize("name", LOGS)
 def test_corner_extraction_runs_on_every_scan_of_real_logs(name):
-    path = CARMEN / f"{name}-corrected.log.gz"
-    if not path.exists():
-        pytest.skip(f"CARMEN log not found at {path} (the shared data folder is absent)")
-    log = read_carmen(path)
+    log = read_carmen(carmen_source(name))
     params = load_toml(CornerParams, PROJECT_ROOT / "configs" / "corners" / "carmen.toml")
     extractor = CornerExtractor(front_laser(log.n_beams), log.n_beams, params)
     lines = observations = 0
@@ -110,13 +115,8 @@ def test_imported_odometry_matches_the_reference_motion_between_scans(tmp_path):
     from mazeslam import log, sidecars
     from mazeslam.filters.motion import dead_reckoning
     from mazeslam.geometry import relative
-    from mazeslam.imports.carmen import import_carmen
 
-    source = CARMEN / "aces-corrected.log.gz"
-    if not source.exists():
-        pytest.skip(f"CARMEN log not found at {source} (the shared data folder is absent)")
-    import_carmen(source, tmp_path / "aces.log")
-    course_log = log.read(tmp_path / "aces.log")
+    course_log = log.read(imported("aces", tmp_path))
     _, reference = sidecars.read_truth(tmp_path / "aces.truth.csv")
     # Dead reckoning restarted at each scan's reference pose reaches the next scan close to it.
     scans = np.flatnonzero(course_log.is_scan)
@@ -138,10 +138,7 @@ def imported(name, tmp_path):
     """A CARMEN building imported as a course log (skips without the shared data)."""
     from mazeslam.imports.carmen import import_carmen
 
-    source = CARMEN / f"{name}-corrected.log.gz"
-    if not source.exists():
-        pytest.skip(f"CARMEN log not found at {source} (the shared data folder is absent)")
-    import_carmen(source, tmp_path / f"{name}.log")
+    import_carmen(carmen_source(name), tmp_path / f"{name}.log")
     return tmp_path / f"{name}.log"
 
 

@@ -21,7 +21,7 @@ from mazeslam.evaluation.metrics import (  # noqa: E402
 )
 from mazeslam.evaluation.plots import save_figure  # noqa: E402
 from mazeslam.filters.motion import dead_reckoning  # noqa: E402
-from mazeslam.geometry import compose, polar_to_cartesian, transform_points  # noqa: E402
+from mazeslam.geometry import transform_points  # noqa: E402
 from mazeslam.slam import SlamResult  # noqa: E402
 
 
@@ -94,13 +94,8 @@ def scan_points_world(course_log: log.CourseLog, poses: np.ndarray, geometry: Be
                       min_range: float = 0.0, max_range: float = np.inf) -> np.ndarray:
     """Every scan's returns within [min_range, max_range] (Q, 2), placed in the world by the
     given poses (R, 3) of the records."""
-    bearings = geometry.bearings(course_log.width)
-    chunks = []
-    for index in np.flatnonzero(course_log.is_scan):
-        ranges = course_log.values[index]
-        valid = (ranges > 0) & (ranges >= min_range) & (ranges <= max_range)
-        sensor = compose(poses[index], [geometry.mount_x, geometry.mount_y, 0.0])
-        chunks.append(transform_points(sensor, polar_to_cartesian(ranges[valid], bearings[valid])))
+    chunks = [transform_points(poses[index], geometry.returns(course_log.values[index], min_range, max_range))
+              for index in np.flatnonzero(course_log.is_scan)]
     return np.concatenate(chunks) if chunks else np.empty((0, 2))
 
 

@@ -158,7 +158,7 @@ class FastSLAM:
         v[:, 0, 0], v[:, 1, 0] = cos_h, sin_h
         v[:, 0, 1], v[:, 1, 1], v[:, 2, 1] = -0.5 * distance * sin_h, 0.5 * distance * cos_h, 1.0
         motion = np.diag([p.sigmaX**2 * abs(distance), p.sigmaTH**2 * abs(turn) + p.sigmaTH_drive**2 * abs(distance)])
-        self.pose_covariances = f @ self.pose_covariances @ np.swapaxes(f, 1, 2) + v @ motion @ np.swapaxes(v, 1, 2)
+        self._carry_motion_covariance(f, v, motion)
         self.poses = advance_pose(self.poses, distance, turn)
 
     def predict_relative(self, increment) -> None:
@@ -182,8 +182,14 @@ class FastSLAM:
         f[:, 1, 2] = cos_t * increment[0] - sin_t * increment[1]
         v = np.tile(np.eye(3), (count, 1, 1))
         v[:, 0, 0], v[:, 0, 1], v[:, 1, 0], v[:, 1, 1] = cos_t, -sin_t, sin_t, cos_t
-        self.pose_covariances = f @ self.pose_covariances @ np.swapaxes(f, 1, 2) + v @ motion @ np.swapaxes(v, 1, 2)
+        self._carry_motion_covariance(f, v, motion)
         self.poses = compose(self.poses, increment)
+
+    def _carry_motion_covariance(self, f: np.ndarray, v: np.ndarray, motion: np.ndarray) -> None:
+        """FastSLAM 2.0: propagate each particle's motion covariance through one motion, F Sigma F^T
+        + V Q V^T, with F (P, 3, 3) and V (P, 3, k) the motion's Jacobians with respect to the pose
+        and to its k noisy terms, and Q (k, k) their covariance."""
+        self.pose_covariances = f @ self.pose_covariances @ np.swapaxes(f, 1, 2) + v @ motion @ np.swapaxes(v, 1, 2)
 
     # -- observation model --------------------------------------------------------------------
     def _used_slots(self) -> int:

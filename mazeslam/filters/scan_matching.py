@@ -32,7 +32,7 @@ from mazeslam.beams import BeamGeometry
 from mazeslam.config import require
 from mazeslam.filters.correlative import CorrelativeParams, LikelihoodGrid, correlative_candidates
 from mazeslam.filters.motion import relative_motion_covariance
-from mazeslam.geometry import advance_pose, compose, polar_to_cartesian, transform_points, wrap_angle
+from mazeslam.geometry import advance_pose, compose, transform_points, wrap_angle
 from mazeslam.log import CourseLog
 
 
@@ -119,8 +119,16 @@ class Match:
     overlap: float
 
 
-def _moved(points: np.ndarray, pose: np.ndarray) -> np.ndarray:
-    return transform_points(pose, points)
+def _data_scale(points: np.ndarray, params: ScanMatchParams) -> float:
+    """Weight of a squared residual (m^2) in the objective: 1 / point_noise^2, scaled to 100 points."""
+    return 100.0 / max(len(points), 1) / params.point_noise**2
+
+
+def _prior_offset(pose: np.ndarray, prior: np.ndarray) -> np.ndarray:
+    """``pose - prior`` (3,) with the heading difference wrapped."""
+    offset = pose - prior
+    offset[2] = wrap_angle(offset[2])
+    return offset
 
 
 def match_scan(reference: ReferenceScan, points: np.ndarray, prior: np.ndarray, prior_covariance: np.ndarray,
@@ -133,10 +141,10 @@ def match_scan(reference: ReferenceScan, points: np.ndarray, prior: np.ndarray, 
     """
     pose = np.array(prior if start is None else start, dtype=float)
     prior_information = np.linalg.inv(prior_covariance)
-    scale = 100.0 / max(len(points), 1) / params.point_noise**2
+    scale = _data_scale(points, params)
     for distance in params.correspondence_distances:
         for _ in range(params.iterations_per_stage):
-            moved = _moved(points, pose)
+            moved = transform_points(pose, points)
             gap, nearest = reference.tree.query(moved, distance_upper_bound=distance)
             used = np.isfinite(gap)
             used[used] = reference.straight[nearest[used]]
@@ -145,8 +153,7 @@ def match_scan(reference: ReferenceScan, points: np.ndarray, prior: np.ndarray, 
             arm = moved[used] - pose[:2]
             jacobian = np.column_stack([normal, normal[:, 1] * arm[:, 0] - normal[:, 0] * arm[:, 1]])
             weight = scale / np.maximum(1.0, np.abs(residual) / params.point_noise)
-            offset = pose - prior
-            offset[2] = wrap_angle(offset[2])
+            offset = _prior_offset(pose, prior)
             hessian = (jacobian * weight[:, None]).T @ jacobian + prior_information
             gradient = (jacobian * weight[:, None]).T @ residual + prior_information @ offset
             pose = pose - np.linalg.solve(hessian, gradient)
@@ -159,13 +166,12 @@ def _score(reference: ReferenceScan, points: np.ndarray, pose: np.ndarray, prior
     """The objective with a point that has no partner within the final correspondence distance
     costing as much as one that far from its surface, and the overlap (the fraction that has one)."""
     cap = params.correspondence_distances[-1]
-    moved = _moved(points, pose)
+    moved = transform_points(pose, points)
     gap, nearest = reference.tree.query(moved)
     residual = np.einsum("ij,ij->i", moved - reference.points[nearest], reference.normals[nearest])
     paired = gap <= cap
-    offset = pose - prior
-    offset[2] = wrap_angle(offset[2])
-    data = np.sum(np.where(paired, np.minimum(residual**2, cap**2), cap**2)) * 100.0 / max(len(points), 1) / params.point_noise**2
+    offset = _prior_offset(pose, prior)
+    data = np.sum(np.where(paired, np.minimum(residual**2, cap**2), cap**2)) * _data_scale(points, params)
     return Match(pose, float(data + offset @ prior_information @ offset), float(np.mean(paired)))
 
 
@@ -202,10 +208,7 @@ class LaserOdometry:
 
 def scan_points(ranges: np.ndarray, geometry: BeamGeometry, params: ScanMatchParams) -> np.ndarray:
     """A scan's returns within the range limits as points (K, 2) in the robot frame, metres."""
-    bearings = geometry.bearings(len(ranges))
-    valid = (ranges > 0) & (ranges >= params.min_range) & (ranges <= params.max_range)
-    sensor = np.array([geometry.mount_x, geometry.mount_y, 0.0])
-    return transform_points(sensor, polar_to_cartesian(ranges[valid], bearings[valid]))
+    return geometry.returns(ranges, params.min_range, params.max_range)
 
 
 def wheel_motion(course_log: CourseLog, first: int, last: int) -> tuple[np.ndarray, bool]:
