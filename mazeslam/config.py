@@ -67,6 +67,19 @@ def load_toml(cls: type[T], path: str | Path) -> T:
     return from_mapping(cls, mapping, str(path))
 
 
+def with_changes(params: T, **changes) -> T:
+    """``params`` (a frozen dataclass) with the given fields replaced; a change of None keeps the
+    field (an option the user did not give). The one merge of command-line options into settings.
+    A value the dataclass refuses raises ``ConfigError`` naming the field(s) changed."""
+    given = {name: value for name, value in changes.items() if value is not None}
+    if not given:
+        return params
+    try:
+        return dataclasses.replace(params, **given)
+    except (TypeError, ValueError) as error:
+        raise ConfigError(f"{', '.join(sorted(given))}: {error}") from error
+
+
 def to_mapping(params) -> dict[str, Any]:
     """The dataclass ``params`` as a plain (JSON/TOML-ready) nested dict."""
     return dataclasses.asdict(params)
