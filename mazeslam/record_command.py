@@ -9,8 +9,8 @@ import sys
 from mazeslam.beams import EXERCISE_CONVENTION
 from mazeslam.envs.maze import generate_maze, load_maze
 from mazeslam.envs.policies import load_commands
+from mazeslam.envs.simulated_robot import SimulatedRobot
 from mazeslam.envs.simulator import SimulationConfig
-from mazeslam.robot.interface import SimulatedRobot
 from mazeslam.robot.recorder import KeyboardController, Recorder, ScriptedController
 
 

@@ -10,9 +10,10 @@ from mazeslam import log, sidecars
 from mazeslam.beams import EXERCISE_CONVENTION
 from mazeslam.envs.laser import RayCaster
 from mazeslam.envs.maze import generate_maze, load_maze, parse_maze
+from mazeslam.envs.simulated_robot import SimulatedRobot
 from mazeslam.robot.emulator import EPuckEmulator, RenderedCamera
 from mazeslam.robot.epuck import EPuck
-from mazeslam.robot.interface import RobotDisconnected, RobotError, SimulatedRobot
+from mazeslam.robot.interface import RobotDisconnected, RobotError
 from mazeslam.robot.omnicam import CameraCalibration, OmniCamera, detect_mirror, image_to_ranges
 from mazeslam.robot.recorder import Recorder, ScriptedController
 from conftest import PROJECT_ROOT

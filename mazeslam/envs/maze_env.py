@@ -36,8 +36,9 @@ from gymnasium import spaces
 from scipy.spatial import cKDTree
 
 from mazeslam.envs.maze import Maze, generate_maze, load_maze
+from mazeslam.envs.simulated_robot import SimulatedRobot
 from mazeslam.envs.simulator import SimulationConfig
-from mazeslam.robot.interface import Robot, SimulatedRobot
+from mazeslam.robot.interface import Robot
 
 #: Spacing (m) of the points along the walls that count as seen once a beam lands near them.
 WALL_SAMPLE_SPACING = 0.01

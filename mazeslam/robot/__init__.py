@@ -1,2 +1,2 @@
-"""The robot side: one interface for the simulated and the real e-puck, its serial driver, the
+"""The robot side: the interface a robot offers (real or simulated), the e-puck's serial driver, the
 omnidirectional camera's "virtual laser", and the recorder that writes course logs from either."""

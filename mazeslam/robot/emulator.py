@@ -15,7 +15,7 @@ import threading
 import numpy as np
 
 from mazeslam.envs.laser import RayCaster
-from mazeslam.robot.interface import SimulatedRobot
+from mazeslam.envs.simulated_robot import SimulatedRobot
 from mazeslam.robot.omnicam import CameraCalibration, render_view
 
 

@@ -22,8 +22,9 @@ import numpy as np
 
 from mazeslam import sidecars
 from mazeslam.beams import BeamGeometry
+from mazeslam.envs.simulated_robot import SimulatedRobot
 from mazeslam.log import LogWriter
-from mazeslam.robot.interface import Robot, RobotDisconnected, RobotError, SimulatedRobot
+from mazeslam.robot.interface import Robot, RobotDisconnected, RobotError
 
 
 @dataclass
