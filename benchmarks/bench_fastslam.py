@@ -24,8 +24,8 @@ from reference_fastslam import LoopFastSLAM  # noqa: E402
 from mazeslam import log, simulate  # noqa: E402
 from mazeslam.filters.corners import CornerExtractor  # noqa: E402
 from mazeslam.filters.fastslam import FastSLAM, FastSLAMParams  # noqa: E402
-from mazeslam.scans import resolve_geometry  # noqa: E402
-from mazeslam.slam import run_fastslam, start_pose  # noqa: E402
+from mazeslam.loaded_run import load_run  # noqa: E402
+from mazeslam.slam import run_fastslam  # noqa: E402
 
 PARTICLES = 1000
 TARGET_SPEEDUP = 30.0
@@ -33,9 +33,9 @@ TARGET_REAL_TIME = 10.0
 
 
 def _inputs(path, scans: int):
-    course_log = log.read(path)
-    geometry, _ = resolve_geometry(path)
-    extractor = CornerExtractor(geometry, course_log.width)
+    run = load_run(path)
+    course_log = run.log
+    extractor = CornerExtractor(run.geometry, course_log.width)
     steps = []
     for record in course_log.records():
         if isinstance(record, log.OdometryRecord):
@@ -60,15 +60,14 @@ def _time(filter_class, steps, start) -> float:
 def run() -> list[dict]:
     with tempfile.TemporaryDirectory() as folder:
         path = simulate(Path(folder) / "run.log", seed=0, progress=False).log_path
-        start = start_pose(path)
+        loaded = load_run(path)
+        start = loaded.start_pose
         steps = _inputs(path, scans=40)
         vectorised = min(_time(FastSLAM, steps, start) for _ in range(3))
         loop = _time(LoopFastSLAM, steps, start)
-        course_log = log.read(path)
-        geometry, _ = resolve_geometry(path)
         tracemalloc.start()
         began = time.perf_counter()
-        run_fastslam(course_log, FastSLAMParams(NPARTICLES=PARTICLES), None, geometry, start, progress=False)
+        run_fastslam(loaded.log, FastSLAMParams(NPARTICLES=PARTICLES), None, loaded.geometry, start, progress=False)
         elapsed = time.perf_counter() - began
         peak = tracemalloc.get_traced_memory()[1]
         tracemalloc.stop()

@@ -18,7 +18,7 @@ import pandas as pd
 from mazeslam import log
 from mazeslam.filters.scan_matching import ScanMatchParams, laser_odometry
 from mazeslam.imports.carmen import import_carmen
-from mazeslam.scans import resolve_geometry
+from mazeslam.loaded_run import load_run
 
 CARMEN = Path(__file__).resolve().parents[2] / "shared" / "data" / "carmen"
 TARGET_REAL_TIME = 100.0
@@ -29,11 +29,10 @@ def timed_laser_odometry(name: str, folder: Path) -> tuple[log.CourseLog, float]
     """Import one CARMEN log and time its laser odometry (seconds)."""
     course = folder / f"{name}.log"
     import_carmen(CARMEN / f"{name}-corrected.log.gz", course)
-    course_log = log.read(course)
-    geometry, _ = resolve_geometry(course)
+    run = load_run(course)
     began = time.perf_counter()
-    laser_odometry(course_log, geometry, ScanMatchParams(enabled=True))
-    return course_log, time.perf_counter() - began
+    laser_odometry(run.log, run.geometry, ScanMatchParams(enabled=True))
+    return run.log, time.perf_counter() - began
 
 
 def run() -> list[dict]:

@@ -1,13 +1,14 @@
 """Beam geometry of a range sensor: which bearing each range in a scan was measured along.
 
 This is the one place that turns a range index into a bearing. The course logs come in more than
-one convention (DESIGN.md, "The course log format"): the exercise's code puts beam k of N at
+one convention (docs/formats.md, "Beam geometry"): the exercise's code puts beam k of N at
 ``-pi + k * 2pi/N``; the real log ``course/log1.txt`` puts it at ``k * 2pi/N``. So the convention
 is a per-log setting, stored in the log's sidecar, never a constant.
 """
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass
 
 import numpy as np
@@ -75,6 +76,26 @@ class BeamGeometry:
             "mount_x": self.mount_x,
             "mount_y": self.mount_y,
         }
+
+
+@dataclass(frozen=True)
+class SensorOverrides:
+    """Beam-geometry settings that replace a log's own (its sidecar or the exercise default); None
+    keeps the log's. TOML section ``[sensor]`` and the command line's ``--first-beam-angle``,
+    ``--beam-direction``, ``--mount-x``. Radians and metres, as in ``BeamGeometry``."""
+
+    first_beam_angle: float | None = None
+    direction: int | None = None
+    mount_x: float | None = None
+    mount_y: float | None = None
+
+    def given(self) -> list[str]:
+        """The names of the settings that are given (not None)."""
+        return [name for name, value in dataclasses.asdict(self).items() if value is not None]
+
+    def apply(self, geometry: BeamGeometry) -> BeamGeometry:
+        """``geometry`` with the given settings replaced."""
+        return dataclasses.replace(geometry, **{name: getattr(self, name) for name in self.given()})
 
 
 #: The exercise's MATLAB code: beam k at -pi + k 2pi/N, counter-clockwise. The simulator's default.

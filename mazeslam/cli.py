@@ -152,9 +152,12 @@ def beam_geometry_options(function):
     return function
 
 
-def _geometry_overrides(first_beam_angle, beam_direction, mount_x) -> dict:
-    return {"first_beam_angle": first_beam_angle, "mount_x": mount_x,
-            "direction": int(beam_direction) if beam_direction else None}
+def _geometry_overrides(first_beam_angle, beam_direction, mount_x):
+    """The beam-geometry options as ``SensorOverrides`` (None: not given)."""
+    from mazeslam.beams import SensorOverrides
+
+    return SensorOverrides(first_beam_angle=first_beam_angle, mount_x=mount_x,
+                           direction=int(beam_direction) if beam_direction else None)
 
 
 @main.command()
@@ -251,7 +254,7 @@ def record(out, port, camera, sim, maze, seed, beams, scan_period, odometry_rate
                        scan_period=scan_period, odometry_rate=odometry_rate, center=center,
                        inner_radius=inner_radius, outer_radius=outer_radius, height=height, alpha=alpha,
                        threshold=threshold, script=script, duration=duration,
-                       geometry_overrides=_geometry_overrides(first_beam_angle, beam_direction, mount_x))
+                       geometry_overrides=dataclasses.asdict(_geometry_overrides(first_beam_angle, beam_direction, mount_x)))
     click.echo("\n".join(lines))
 
 
@@ -281,28 +284,26 @@ def sweep(sweep_file, out_dir, workers, scheduler, quiet):
               help="A slam config; with [scan_matching] enabled, the laser odometry is measured instead.")
 def odometry_noise(log_file, config_path):
     """Measure a log's odometry noise against its truth sidecar, as [fastslam] settings."""
-    from mazeslam import sidecars
     from mazeslam.evaluation.odometry_noise import fit_noise, laser_stretch_errors, measure_odometry_noise
     from mazeslam.filters.scan_matching import laser_odometry
-    from mazeslam.scans import resolve_geometry
+    from mazeslam.loaded_run import load_run
     from mazeslam.slam import load_slam_config
 
-    truth_file = sidecars.truth_path(log_file)
-    if not truth_file.exists():
-        raise click.ClickException(f"{log_file}: no truth sidecar {truth_file.name}: the noise is measured against it")
-    course_log, truth = log.read(log_file), sidecars.read_truth(truth_file)[1]
     config = load_slam_config(config_path)
+    run = load_run(log_file, config.sensor)
+    if run.truth is None:
+        raise click.ClickException(f"{log_file}: no truth sidecar {run.name}.truth.csv: the noise is measured against it")
+    truth_file = f"{run.name}.truth.csv"
     try:
         if config.scan_matching.enabled:
-            geometry, _ = resolve_geometry(log_file, config.sensor.as_dict())
-            laser = laser_odometry(course_log, geometry, config.scan_matching)
-            noise, source = fit_noise(laser_stretch_errors(laser, truth[laser.scan_records])), "laser odometry"
+            laser = laser_odometry(run.log, run.geometry, config.scan_matching)
+            noise, source = fit_noise(laser_stretch_errors(laser, run.truth[laser.scan_records])), "laser odometry"
         else:
-            noise, source = measure_odometry_noise(course_log, truth), "odometry"
+            noise, source = measure_odometry_noise(run.log, run.truth), "odometry"
     except ValueError as error:
         raise click.ClickException(f"{log_file}: {error}") from error
     click.echo(f"# {log_file}: {noise.stretches} stretches between observations, {noise.distance:.2f} m driven, "
-               f"{noise.turn:.1f} rad turned ({source} against {truth_file.name})")
+               f"{noise.turn:.1f} rad turned ({source} against {truth_file})")
     click.echo("[fastslam]")
     click.echo(f"sigmaX = {noise.sigmaX:.4g}          # m per sqrt(m)")
     click.echo(f"sigmaTH = {noise.sigmaTH:.4g}         # rad per sqrt(rad) turned")

@@ -8,8 +8,10 @@ the key, so a typo never silently falls back to a default.
 from __future__ import annotations
 
 import dataclasses
+import enum
 import math
 import tomllib
+import typing
 from pathlib import Path
 from typing import Any, TypeVar
 
@@ -33,25 +35,30 @@ def from_mapping(cls: type[T], mapping: dict[str, Any], where: str = "config") -
         raise ConfigError(
             f"{where}: unknown parameter(s) {', '.join(unknown)}; known: {', '.join(sorted(fields))}"
         )
+    hints = typing.get_type_hints(cls)
     values = {}
     for name, value in mapping.items():
-        default = getattr(cls, "__dataclass_fields__")[name].default_factory
-        nested_type = _nested_dataclass_type(cls, name, default)
-        if nested_type is not None:
-            values[name] = from_mapping(nested_type, value, f"{where} [{name}]")
+        kind = hints.get(name)
+        if isinstance(kind, type) and dataclasses.is_dataclass(kind):
+            values[name] = from_mapping(kind, value, f"{where} [{name}]")
         else:
-            values[name] = value
+            values[name] = _coerce(kind, name, value, where)
     try:
         return cls(**values)
     except (TypeError, ValueError) as error:
         raise ConfigError(f"{where}: {error}") from error
 
 
-def _nested_dataclass_type(cls, name, default_factory):
-    """The dataclass type of field ``name`` if it holds a nested dataclass, else None."""
-    if default_factory is not dataclasses.MISSING and dataclasses.is_dataclass(default_factory):
-        return default_factory
-    return None
+def _coerce(kind, name: str, value, where: str):
+    """``value`` as the option type ``kind`` where that is an Enum (TOML and the command line give
+    its value); any other value unchanged (the dataclass checks it)."""
+    if not (isinstance(kind, type) and issubclass(kind, enum.Enum)):
+        return value
+    try:
+        return kind(value)
+    except ValueError as error:
+        choices = ", ".join(repr(member.value) for member in kind)
+        raise ConfigError(f"{where}: {name} must be one of {choices}, got {value!r}") from error
 
 
 def load_toml(cls: type[T], path: str | Path) -> T:
@@ -71,7 +78,9 @@ def with_changes(params: T, **changes) -> T:
     """``params`` (a frozen dataclass) with the given fields replaced; a change of None keeps the
     field (an option the user did not give). The one merge of command-line options into settings.
     A value the dataclass refuses raises ``ConfigError`` naming the field(s) changed."""
-    given = {name: value for name, value in changes.items() if value is not None}
+    hints = typing.get_type_hints(type(params))
+    given = {name: _coerce(hints.get(name), name, value, type(params).__name__)
+             for name, value in changes.items() if value is not None}
     if not given:
         return params
     try:

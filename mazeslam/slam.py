@@ -8,7 +8,6 @@ match to the one before instead, and odometry records only inform that match.
 
 from __future__ import annotations
 
-import dataclasses
 import math
 import time
 from dataclasses import dataclass, field
@@ -17,13 +16,14 @@ from pathlib import Path
 import numpy as np
 from tqdm.auto import tqdm
 
-from mazeslam import log, sidecars
-from mazeslam.beams import EXERCISE_CONVENTION, BeamGeometry
+from mazeslam import log
+from mazeslam.beams import EXERCISE_CONVENTION, BeamGeometry, SensorOverrides
 from mazeslam.config import load_toml
 from mazeslam.filters.corners import CornerExtractor, CornerParams
-from mazeslam.filters.fastslam import FastSLAM, FastSLAMParams, UpdateReport
+from mazeslam.filters.fastslam import Association, FastSLAM, FastSLAMParams, UpdateReport
 from mazeslam.filters.scan_matching import LaserOdometry, ScanMatchParams, laser_odometry
-from mazeslam.scans import resolve_geometry
+from mazeslam.geometry import polar_to_cartesian, transform_points
+from mazeslam.loaded_run import LoadedRun, load_run
 
 
 @dataclass
@@ -108,7 +108,7 @@ def run_fastslam(course_log: log.CourseLog, params: FastSLAMParams | None = None
                 done = _same_time_landmarks(records, position)
                 z = np.array([[r.range, r.bearing] for r in done])
                 covariances, ids = None, np.array([r.landmark for r in done])
-            reports.append(slam.update(z, covariances, ids if params.association == "known" else None))
+            reports.append(slam.update(z, covariances, ids if params.association == Association.KNOWN else None))
             if snapshot_every and (len(reports) - 1) % snapshot_every == 0:
                 snapshots.append((record.index, slam.poses.copy(), slam.landmarks()[0]))
         mean, best, spread = slam.mean_pose(), slam.poses[slam.best_particle()], slam.pose_covariance()
@@ -140,71 +140,51 @@ def _same_time_landmarks(records: list, position: int) -> list:
     return group
 
 
-def slam_on_file(path: str | Path, config: SlamConfig | None = None, progress: bool = True,
-                 snapshot_every: int = 0, laser: LaserOdometry | None = None) -> SlamResult:
-    """``run_fastslam`` on a log file, with the beam geometry and start pose from its map sidecar
-    (the start pose is the origin for a log without one).
+def slam_on_run(run: LoadedRun, config: SlamConfig | None = None, progress: bool = True, snapshot_every: int = 0,
+                laser: LaserOdometry | None = None) -> SlamResult:
+    """``run_fastslam`` on a loaded log, from its start pose with its beam geometry.
 
     With ``[scan_matching] enabled`` the filter moves by the log's laser odometry: ``laser`` if
     given (it does not depend on the filter's seed, so runs over several seeds can share it), else
     matched here; without it, ``laser`` is not used."""
     config = config or SlamConfig()
-    course_log = log.read(path)
-    geometry, _ = resolve_geometry(path, config.sensor.as_dict())
+    course_log = run.log
     if config.scan_matching.enabled and (not course_log.is_scan.any() or course_log.is_landmark.any()):
-        raise ValueError(f"{path}: [scan_matching] needs a log of scans (laser odometry moves the filter scan to "
+        raise ValueError(f"{run.path}: [scan_matching] needs a log of scans (laser odometry moves the filter scan to "
                          "scan); this one has landmark records or no scans: turn it off")
     if not config.scan_matching.enabled:
         laser = None
     elif laser is None:
-        laser = laser_odometry(course_log, geometry, config.scan_matching)
+        laser = laser_odometry(course_log, run.geometry, config.scan_matching)
     identify = None
-    if config.fastslam.association == "known" and course_log.is_scan.any():
-        identify = truth_identities(path, config.evaluation.match_radius)
-    return run_fastslam(course_log, config.fastslam, config.corners, geometry, start_pose(path), progress,
+    if config.fastslam.association == Association.KNOWN and course_log.is_scan.any():
+        identify = truth_identities(run, config.evaluation.match_radius)
+    return run_fastslam(course_log, config.fastslam, config.corners, run.geometry, run.start_pose, progress,
                         snapshot_every, config.odometry.jump_tolerance, identify, laser)
 
 
-def truth_identities(path: str | Path, radius: float):
+def slam_on_file(path: str | Path, config: SlamConfig | None = None, progress: bool = True,
+                 snapshot_every: int = 0, laser: LaserOdometry | None = None) -> SlamResult:
+    """``slam_on_run`` on a log file (its sidecars read beside it, ``[sensor]`` applied)."""
+    config = config or SlamConfig()
+    return slam_on_run(load_run(path, config.sensor), config, progress, snapshot_every, laser)
+
+
+def truth_identities(run: LoadedRun, radius: float):
     """For known association on a simulated log: name each observation by the true corner (map
     sidecar) within ``radius`` metres of where the true pose (truth sidecar) puts it; -1 if none.
     A diagnosis tool: it tells association errors apart from everything else."""
-    truth_file, map_file = sidecars.truth_path(path), sidecars.map_path(path)
-    if not (truth_file.exists() and map_file.exists()):
-        raise ValueError(f"{path}: known association on scans needs the truth and map sidecars to name the corners")
-    _, truth = sidecars.read_truth(truth_file)
-    corners = sidecars.read_map(map_file)["corners"]
+    if run.truth is None or run.world is None:
+        raise ValueError(f"{run.path}: known association on scans needs the truth and map sidecars to name the corners")
+    truth, corners = run.truth, run.true_corners
 
     def identify(record_index: int, observations: np.ndarray) -> np.ndarray:
-        pose = truth[record_index]
-        angle = pose[2] + observations[:, 1]
-        world = pose[:2] + observations[:, :1] * np.column_stack([np.cos(angle), np.sin(angle)])
+        world = transform_points(truth[record_index], polar_to_cartesian(observations[:, 0], observations[:, 1]))
         distance = np.hypot(*(world[:, None, :] - corners[None]).transpose(2, 0, 1))
         nearest = distance.argmin(axis=1)
         return np.where(distance[np.arange(len(world)), nearest] <= radius, nearest, -1)
 
     return identify
-
-
-def start_pose(path: str | Path) -> np.ndarray:
-    """The true start pose from a log's map sidecar, else the origin: where the filter starts."""
-    map_file = sidecars.map_path(path)
-    pose = sidecars.read_map(map_file).get("start_pose") if map_file.exists() else None
-    return np.asarray(pose if pose is not None else (0.0, 0.0, 0.0), dtype=float)
-
-
-@dataclass(frozen=True)
-class SensorOverrides:
-    """Beam-geometry settings that replace the log's own (its sidecar or the exercise default);
-    None keeps the log's. Radians and metres, see ``mazeslam.beams.BeamGeometry``."""
-
-    first_beam_angle: float | None = None
-    direction: int | None = None
-    mount_x: float | None = None
-    mount_y: float | None = None
-
-    def as_dict(self) -> dict:
-        return {k: v for k, v in dataclasses.asdict(self).items() if v is not None}
 
 
 @dataclass(frozen=True)

@@ -6,53 +6,80 @@ import dataclasses
 import time
 from pathlib import Path
 
-from mazeslam import log, sidecars
+from mazeslam import sidecars
 from mazeslam.beam_detection import convention_warning
-from mazeslam.config import jsonable
+from mazeslam.beams import SensorOverrides
+from mazeslam.config import jsonable, with_changes
 from mazeslam.evaluation import slam_report
-from mazeslam.scans import resolve_geometry
-from mazeslam.slam import load_slam_config, slam_on_file, start_pose
-
+from mazeslam.evaluation.scoring import RPE_DISTANCE, score_run
+from mazeslam.loaded_run import LoadedRun, load_run
+from mazeslam.slam import SlamConfig, SlamResult, load_slam_config, slam_on_run
 
 #: About how many frames ``--animate`` draws, whatever the log's length.
 ANIMATION_FRAMES = 150
 
 
-def run_slam_command(log_file, config_path, out_dir, filter_changes: dict | None = None, geometry_overrides=None,
-                     animate=False, progress=True) -> list[str]:
+def run_slam_command(log_file, config_path, out_dir, filter_changes: dict | None = None,
+                     sensor: SensorOverrides | None = None, animate=False, progress=True) -> list[str]:
     """Run, write ``out_dir``/{trajectory.csv, best_trajectory.csv, map.json, slam.png[, slam.gif]};
-    return the lines to print. ``filter_changes`` replace ``[fastslam]`` settings (None: keep)."""
+    return the lines to print. ``filter_changes`` replace ``[fastslam]`` settings and ``sensor``
+    the ``[sensor]`` ones (None values: keep the config's)."""
     config = load_slam_config(config_path)
-    changes = {k: v for k, v in (filter_changes or {}).items() if v is not None}
-    if changes:
-        config = dataclasses.replace(config, fastslam=dataclasses.replace(config.fastslam, **changes))
-    sensor = {k: v for k, v in (geometry_overrides or {}).items() if v is not None}
-    if sensor:
-        config = dataclasses.replace(config, sensor=dataclasses.replace(config.sensor, **sensor))
-    course_log = log.read(log_file)
-    geometry, origin = resolve_geometry(log_file, config.sensor.as_dict())
-    start = start_pose(log_file)
-    updates = int(course_log.is_scan.sum() + course_log.is_landmark.sum())
+    config = dataclasses.replace(config, fastslam=with_changes(config.fastslam, **(filter_changes or {})),
+                                 sensor=with_changes(config.sensor, **dataclasses.asdict(sensor or SensorOverrides())))
+    run = load_run(log_file, config.sensor)
+    updates = int(run.log.is_scan.sum() + run.log.is_landmark.sum())
     every = max(1, updates // ANIMATION_FRAMES) if animate else 0  # frames for the GIF, at most ~ANIMATION_FRAMES
     began = time.perf_counter()
-    result = slam_on_file(log_file, config, progress, snapshot_every=every)
+    result = slam_on_run(run, config, progress, snapshot_every=every)
     matching_seconds = time.perf_counter() - began - result.step_seconds.sum()
-    lines = [f"{log_file}: {len(course_log)} records, {len(result.reports)} observation updates; beam geometry from {origin}",
+    lines = _run_lines(run, config, result, matching_seconds)
+    score = score_run(run, result, config.evaluation.match_radius)
+    extra = {"source": str(log_file), "beam_geometry": run.geometry.to_dict(), "start_pose": run.start_pose.tolist(),
+             "parameters": jsonable(dataclasses.asdict(config)), "consistency": slam_report.consistency(result),
+             "dropped_odometry_lines": [int(run.log.line_numbers[r.index]) for r in result.dropped_odometry]}
+    if score is not None:
+        lines += _score_lines(run, result, score, config.evaluation.match_radius)
+        extra["ate"] = score.table.reset_index().to_dict(orient="records")
+        extra["map_error"] = score.map_errors
+    else:
+        lines.append("no ground truth beside the log: no errors to report")
+    paths = slam_report.write_outputs(out_dir, result, extra)
+    if run.truth is not None:
+        paths["truth_tum"] = Path(out_dir) / "truth.tum"
+        sidecars.write_tum(paths["truth_tum"], run.log.times, run.truth)
+    points = slam_report.scan_points_world(run.log, result.mean_poses, run.geometry, config.corners.min_range,
+                                           config.corners.max_range)
+    truth_label = "reference path" if run.truth_is_reference else "true path"
+    paths["figure"] = slam_report.plot_slam(Path(out_dir) / "slam.png", result, points, run.truth, run.walls,
+                                            title=f"{run.path.name}: FastSLAM, {config.fastslam.NPARTICLES} particles",
+                                            true_landmarks=run.true_corners if run.world is not None else None,
+                                            truth_label=truth_label)
+    if animate:
+        paths["animation"] = slam_report.animate_slam(Path(out_dir) / "slam.gif", result, points, run.truth, run.walls)
+    lines.append("wrote " + ", ".join(str(p) for p in paths.values()))
+    return lines
+
+
+def _run_lines(run: LoadedRun, config: SlamConfig, result: SlamResult, matching_seconds: float) -> list[str]:
+    """What the run did: records, particles, resamplings, speed, laser odometry, warnings, glitches."""
+    course_log, seconds = run.log, result.step_seconds.sum()
+    speed = (f" ({course_log.duration / max(seconds, 1e-9):.0f}x real time)" if course_log.duration > 0
+             else " (the log's timestamps span no time)")
+    lines = [f"{run.path}: {len(course_log)} records, {len(result.reports)} observation updates; "
+             f"beam geometry from {run.geometry_origin}",
              f"FastSLAM: {config.fastslam.NPARTICLES} particles, {result.resamplings} resamplings, "
-             f"{len(result.landmarks)} landmarks in the best particle's map, "
-             f"{result.step_seconds.sum():.2f} s" + (f" ({course_log.duration / max(result.step_seconds.sum(), 1e-9):.0f}x real time)"
-                                                     if course_log.duration > 0 else " (the log's timestamps span no time)")]
+             f"{len(result.landmarks)} landmarks in the best particle's map, {seconds:.2f} s" + speed]
     if result.laser_odometry is not None:
         laser = result.laser_odometry
         lines.append(f"Laser odometry ({matching_seconds:.1f} s): {int(laser.accepted.sum())} of {len(laser.accepted) - 1} "
                      "scan-to-scan matches accepted; intervals without odometry records (matched by correlative search): "
                      f"{int((~laser.had_odometry[1:]).sum())}")
-    if not origin.startswith("sidecar") and course_log.is_scan.sum() > 1:
-        warning = convention_warning(course_log, geometry, config.corners.min_range, config.corners.max_range,
+    if not run.geometry_from_sidecar and course_log.is_scan.sum() > 1:
+        warning = convention_warning(course_log, run.geometry, config.corners.min_range, config.corners.max_range,
                                      config.odometry.jump_tolerance)
         if warning:
             lines.append(warning)
-    match_radius = config.evaluation.match_radius
     if result.dropped_odometry:
         lines.append(f"left out {len(result.dropped_odometry)} odometry records travelling more than "
                      f"{config.odometry.jump_tolerance:g} m in one step (glitches): "
@@ -63,48 +90,18 @@ def run_slam_command(log_file, config_path, out_dir, filter_changes: dict | None
                  f"(median {checks['median_observations']:.0f} observations each), the nearest two "
                  f"{checks['nearest_landmarks_m']:.3f} m apart; largest path step between records "
                  f"{checks['largest_path_step_m']:.3f} m")
-    evaluation = slam_report.evaluate_against_truth(log_file, course_log, result, start, match_radius)
-    world = sidecars.read_map(sidecars.map_path(log_file)) if sidecars.map_path(log_file).exists() else {}
-    extra = {"source": str(log_file), "beam_geometry": geometry.to_dict(), "start_pose": start.tolist(),
-             "parameters": jsonable(dataclasses.asdict(config)), "consistency": checks,
-             "dropped_odometry_lines": [int(course_log.line_numbers[r.index]) for r in result.dropped_odometry]}
-    if evaluation is not None:
-        table, map_errors = evaluation
-        scored = "at the scans (laser odometry: no pose between scans)" if result.laser_odometry is not None else "at every record"
-        against = world.get("truth_kind", "ground truth")
-        lines += [f"Errors against {against}, {scored}: ATE [m] (aligned: after the best rigid motion), RPE over "
-                  f"{slam_report.RPE_DISTANCE} m of path [m, rad], NEES of the pose (consistent: 3):",
-                  table.to_markdown(floatfmt=".4f")]
-        truth_tum = Path(out_dir) / "truth.tum"
-        has_corners = len(world.get("corners", [])) > 0
-        if not has_corners:
-            lines.append("Map: no true corners beside the log, the map is not scored")
-        for name, errors in map_errors.items() if has_corners else ():
-            lines.append(f"Map ({name}): {errors['matched']} landmarks within {match_radius:g} m of a true one, "
-                         f"RMSE {errors['rmse']:.4f} m, precision {errors['precision']:.2f}, recall {errors['recall']:.2f}")
-        extra["ate"] = table.reset_index().to_dict(orient="records")
-        extra["map_error"] = map_errors
-    else:
-        lines.append("no ground truth beside the log: no errors to report")
-    paths = slam_report.write_outputs(out_dir, result, extra)
-    if evaluation is not None:
-        sidecars.write_tum(truth_tum, *sidecars.read_truth(sidecars.truth_path(log_file)))
-        paths["truth_tum"] = truth_tum
-    truth = sidecars.read_truth(sidecars.truth_path(log_file))[1] if evaluation is not None else None
-    points = slam_report.scan_points_world(course_log, result.mean_poses, geometry, config.corners.min_range,
-                                           config.corners.max_range)
-    walls = world.get("walls")
-    paths["figure"] = slam_report.plot_slam(Path(out_dir) / "slam.png", result, points, truth, walls,
-                                            title=f"{Path(log_file).name}: FastSLAM, {config.fastslam.NPARTICLES} particles",
-                                            true_landmarks=world.get("corners"),
-                                            truth_label=_truth_label(world))
-    if animate:
-        paths["animation"] = slam_report.animate_slam(Path(out_dir) / "slam.gif", result, points, truth, walls)
-    lines.append("wrote " + ", ".join(str(p) for p in paths.values()))
     return lines
 
 
-
-def _truth_label(world: dict) -> str:
-    """How a figure names the path of the truth sidecar: a reference (CARMEN's corrected poses) or the true path."""
-    return "reference path" if world.get("truth_kind", "").startswith("reference") else "true path"
+def _score_lines(run: LoadedRun, result: SlamResult, score, match_radius: float) -> list[str]:
+    """The error table against the truth and the map's errors."""
+    scored = "at the scans (laser odometry: no pose between scans)" if result.laser_odometry is not None else "at every record"
+    lines = [f"Errors against {run.truth_label}, {scored}: ATE [m] (aligned: after the best rigid motion), RPE over "
+             f"{RPE_DISTANCE} m of path [m, rad], NEES of the pose (consistent: 3):",
+             score.table.to_markdown(floatfmt=".4f")]
+    if not len(run.true_corners):
+        return lines + ["Map: no true corners beside the log, the map is not scored"]
+    for name, errors in score.map_errors.items():
+        lines.append(f"Map ({name}): {errors['matched']} landmarks within {match_radius:g} m of a true one, "
+                     f"RMSE {errors['rmse']:.4f} m, precision {errors['precision']:.2f}, recall {errors['recall']:.2f}")
+    return lines

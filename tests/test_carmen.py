@@ -150,17 +150,16 @@ def test_laser_odometry_on_real_scans_beats_the_wheels(name, scans, tmp_path):
     from mazeslam.evaluation.metrics import absolute_trajectory_error
     from mazeslam.filters.motion import dead_reckoning
     from mazeslam.filters.scan_matching import laser_odometry
-    from mazeslam.scans import resolve_geometry
+    from mazeslam.loaded_run import load_run
     from mazeslam.slam import load_slam_config
 
     path = imported(name, tmp_path)
-    full = log.read(path)
-    stop = np.flatnonzero(full.is_scan)[scans - 1] + 1
-    course_log = dataclass_slice(full, 0, stop)
-    reference = sidecars.read_truth(sidecars.truth_path(path))[1][:stop]
-    start = sidecars.read_map(sidecars.map_path(path))["start_pose"]
-    geometry, _ = resolve_geometry(path)
-    laser = laser_odometry(course_log, geometry, load_slam_config(PROJECT_ROOT / "configs" / "carmen.toml").scan_matching)
+    run = load_run(path)
+    stop = np.flatnonzero(run.log.is_scan)[scans - 1] + 1
+    course_log = dataclass_slice(run.log, 0, stop)
+    reference = run.truth[:stop]
+    start = run.start_pose
+    laser = laser_odometry(course_log, run.geometry, load_slam_config(PROJECT_ROOT / "configs" / "carmen.toml").scan_matching)
     at_scans = reference[laser.scan_records]
     wheels = absolute_trajectory_error(dead_reckoning(course_log, start)[laser.scan_records], at_scans)["rmse"]
     lasers = absolute_trajectory_error(laser.poses(start), at_scans)["rmse"]

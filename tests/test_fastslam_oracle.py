@@ -7,13 +7,13 @@ import numpy as np
 from mazeslam import log
 from mazeslam.filters.corners import CornerExtractor
 from mazeslam.filters.fastslam import FastSLAM, FastSLAMParams
-from mazeslam.scans import resolve_geometry
+from mazeslam.loaded_run import load_run
 from reference_fastslam import LoopFastSLAM
 
 
 def test_vectorised_update_equals_the_per_particle_loop(default_run):
     course_log = log.read(default_run.log_path)
-    geometry, _ = resolve_geometry(default_run.log_path)
+    geometry = load_run(default_run.log_path).geometry
     extractor = CornerExtractor(geometry, course_log.width)
     params = FastSLAMParams(NPARTICLES=12, seed=4)
     fast, loop = FastSLAM(params), LoopFastSLAM(params)

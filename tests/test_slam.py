@@ -10,7 +10,8 @@ from mazeslam.envs.laser import LaserParams
 from mazeslam.envs.simulator import SimulationConfig
 from mazeslam.evaluation.metrics import absolute_trajectory_error, map_error
 from mazeslam.filters.motion import dead_reckoning
-from mazeslam.slam import SensorOverrides, SlamConfig, slam_on_file
+from mazeslam.beams import SensorOverrides
+from mazeslam.slam import SlamConfig, slam_on_file
 
 
 def errors(run_result, slam_result):

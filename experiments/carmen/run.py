@@ -26,14 +26,13 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 import pandas as pd  # noqa: E402
 
-from mazeslam import log, sidecars  # noqa: E402
 from mazeslam.evaluation import slam_report  # noqa: E402
 from mazeslam.evaluation.metrics import absolute_trajectory_error  # noqa: E402
 from mazeslam.filters.motion import dead_reckoning  # noqa: E402
 from mazeslam.imports.carmen import import_carmen  # noqa: E402
-from mazeslam.scans import resolve_geometry  # noqa: E402
+from mazeslam.loaded_run import LoadedRun, load_run  # noqa: E402
 from mazeslam.filters.scan_matching import LaserOdometry, laser_odometry  # noqa: E402
-from mazeslam.slam import SlamConfig, load_slam_config, slam_on_file  # noqa: E402
+from mazeslam.slam import SlamConfig, load_slam_config, slam_on_run  # noqa: E402
 
 HERE = Path(__file__).resolve().parent
 PROJECT = HERE.parents[1]
@@ -49,13 +48,13 @@ def ate(poses: np.ndarray, reference: np.ndarray) -> tuple[float, float]:
             absolute_trajectory_error(poses, reference, align=True)["rmse"])
 
 
-def run_one(course: Path, config: SlamConfig, seed: int, laser: LaserOdometry, reference: np.ndarray,
+def run_one(run: LoadedRun, config: SlamConfig, seed: int, laser: LaserOdometry, reference: np.ndarray,
             scans: np.ndarray) -> dict:
     """FastSLAM on one imported log with one filter seed, moving by the log's laser odometry
     ``laser``: its errors at the scans (``reference`` poses at the ``scans`` records), and the result."""
     config = dataclasses.replace(config, fastslam=dataclasses.replace(config.fastslam, seed=seed))
     began = time.perf_counter()
-    result = slam_on_file(course, config, progress=False, laser=laser)
+    result = slam_on_run(run, config, progress=False, laser=laser)
     seconds = time.perf_counter() - began
     raw, aligned = ate(result.mean_poses[scans], reference[scans])
     return {"seed": seed, "ate": raw, "aligned": aligned, "seconds": seconds, "landmarks": len(result.landmarks),
@@ -68,15 +67,13 @@ def evaluate(name: str, seeds: int, out: Path) -> dict:
     course = out / f"{name}.log"
     import_carmen(DATA / f"{name}-corrected.log.gz", course)
     config = load_slam_config(CONFIG)
-    course_log = log.read(course)
-    _, reference = sidecars.read_truth(sidecars.truth_path(course))
-    start = sidecars.read_map(sidecars.map_path(course))["start_pose"]
+    run = load_run(course)
+    course_log, reference, start = run.log, run.truth, run.start_pose
     scans = np.flatnonzero(course_log.is_scan)
-    geometry, _ = resolve_geometry(course)
     began = time.perf_counter()
-    laser = laser_odometry(course_log, geometry, config.scan_matching)
+    laser = laser_odometry(course_log, run.geometry, config.scan_matching)
     matching_seconds = time.perf_counter() - began
-    runs = sorted((run_one(course, config, seed, laser, reference, scans) for seed in range(seeds)),
+    runs = sorted((run_one(run, config, seed, laser, reference, scans) for seed in range(seeds)),
                   key=lambda run: run["ate"])
     median = runs[len(runs) // 2]
     row = {"log": name, "scans": len(scans), "particles": config.fastslam.NPARTICLES}
@@ -87,7 +84,7 @@ def evaluate(name: str, seeds: int, out: Path) -> dict:
     row["FastSLAM aligned [m] (median)"] = float(np.median([run["aligned"] for run in runs]))
     row["landmarks"] = median["landmarks"]
     row["FastSLAM s"] = matching_seconds + float(np.median([run["seconds"] for run in runs]))
-    points = slam_report.scan_points_world(course_log, median["result"].mean_poses, geometry, 0.1,
+    points = slam_report.scan_points_world(course_log, median["result"].mean_poses, run.geometry, 0.1,
                                            config.corners.max_range)
     title = f"{name}: FastSLAM on laser odometry (filter seed {median['seed']}, the median of {seeds})"
     slam_report.plot_slam(FIGURES / f"{name}.png", median["result"], points[::5], reference[scans], None,

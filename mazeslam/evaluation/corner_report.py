@@ -16,9 +16,9 @@ from matplotlib.animation import FuncAnimation, PillowWriter  # noqa: E402
 import numpy as np  # noqa: E402
 from tqdm.auto import tqdm  # noqa: E402
 
-from mazeslam import log  # noqa: E402
 from mazeslam.beam_detection import convention_warning  # noqa: E402
-from mazeslam.config import jsonable, load_toml  # noqa: E402
+from mazeslam.beams import SensorOverrides  # noqa: E402
+from mazeslam.config import jsonable, load_toml, with_changes  # noqa: E402
 from mazeslam.evaluation.corner_plots import draw_scan, plot_scan  # noqa: E402
 from mazeslam.filters.corners import CornerExtractor, CornerParams, ScanFeatures  # noqa: E402
 from mazeslam.geometry import inverse, transform_points  # noqa: E402
@@ -34,12 +34,10 @@ class CornerReport:
     features: list[ScanFeatures]
 
     @classmethod
-    def from_log(cls, path, config_path=None, mode: str | None = None, geometry_overrides: dict | None = None,
+    def from_log(cls, path, config_path=None, mode: str | None = None, sensor: SensorOverrides | None = None,
                  progress: bool = True) -> CornerReport:
-        params = load_toml(CornerParams, config_path) if config_path else CornerParams()
-        if mode:
-            params = dataclasses.replace(params, mode=mode)
-        scans = load_scans(path, geometry_overrides)
+        params = with_changes(load_toml(CornerParams, config_path) if config_path else CornerParams(), mode=mode)
+        scans = load_scans(path, sensor)
         extractor = CornerExtractor(scans.geometry, scans.n_beams, params)
         features = [extractor.extract(ranges)
                     for ranges in tqdm(scans.ranges, desc="corners", unit="scan", disable=not progress)]
@@ -63,10 +61,10 @@ class CornerReport:
     def convention_warning(self) -> str | None:
         """For a course log whose beam geometry is not from a sidecar: a warning when another
         convention makes its consecutive scans agree clearly better (``mazeslam.beam_detection``)."""
-        if self.scans.geometry_origin.startswith(("sidecar", "CARMEN")) or len(self.features) < 2:
+        run = self.scans.run
+        if run is None or run.geometry_from_sidecar or len(self.features) < 2:
             return None
-        course_log = log.read(self.scans.source)
-        return convention_warning(course_log, self.scans.geometry, self.params.min_range, self.params.max_range)
+        return convention_warning(run.log, self.scans.geometry, self.params.min_range, self.params.max_range)
 
     def _title(self, index: int) -> str:
         return (f"{Path(self.scans.source).name}: scan {index} (record {self.scans.records[index]}, "

@@ -10,66 +10,14 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
-import pandas as pd  # noqa: E402
 from matplotlib.animation import FuncAnimation, PillowWriter  # noqa: E402
 from matplotlib.patches import Ellipse  # noqa: E402
 
 from mazeslam import log, sidecars  # noqa: E402
 from mazeslam.beams import BeamGeometry  # noqa: E402
-from mazeslam.evaluation.metrics import (  # noqa: E402
-    absolute_trajectory_error, align_se2, apply_se2, map_error, normalized_estimation_error, relative_pose_error,
-)
 from mazeslam.evaluation.plots import save_figure  # noqa: E402
-from mazeslam.filters.motion import dead_reckoning  # noqa: E402
 from mazeslam.geometry import transform_points  # noqa: E402
 from mazeslam.slam import SlamResult  # noqa: E402
-
-
-#: Stretch of the true path over which the relative pose error is measured, metres.
-RPE_DISTANCE = 0.1
-
-
-def error_table(estimates: dict[str, np.ndarray], truth: np.ndarray) -> pd.DataFrame:
-    """ATE (RMSE, mean, max; without and with SE(2) alignment, metres) and RPE over
-    ``RPE_DISTANCE`` of path (translation m, rotation rad) of each named trajectory."""
-    rows = []
-    for name, poses in estimates.items():
-        raw = absolute_trajectory_error(poses, truth)
-        aligned = absolute_trajectory_error(poses, truth, align=True)
-        rpe = relative_pose_error(poses, truth, RPE_DISTANCE)
-        rows.append({"estimator": name, "ate_rmse": raw["rmse"], "ate_mean": raw["mean"], "ate_max": raw["max"],
-                     "aligned_rmse": aligned["rmse"], "aligned_mean": aligned["mean"], "aligned_max": aligned["max"],
-                     "rpe_trans_rmse": rpe["trans_rmse"], "rpe_rot_rmse": rpe["rot_rmse"]})
-    return pd.DataFrame(rows).set_index("estimator")
-
-
-def evaluate_against_truth(path, course_log: log.CourseLog, result: SlamResult, start,
-                           match_radius: float = 0.05) -> tuple[pd.DataFrame, dict] | None:
-    """The ATE table (dead reckoning, laser odometry when the filter used it, and FastSLAM) and the
-    map errors, when the log has truth sidecars: as estimated, and after moving the map by the
-    rigid motion that best aligns the estimated trajectory with the true one (the map shares the
-    trajectory's frame). Every record is scored, or only the scans when the filter moved by laser
-    odometry (it knows no pose between two scans)."""
-    truth_file, map_file = sidecars.truth_path(path), sidecars.map_path(path)
-    if not truth_file.exists():
-        return None
-    _, truth = sidecars.read_truth(truth_file)
-    laser = result.laser_odometry
-    rows = laser.scan_records if laser is not None else np.arange(len(course_log))
-    estimates = {"dead reckoning": dead_reckoning(course_log, start)[rows]}
-    if laser is not None:
-        estimates["laser odometry"] = laser.poses(start)
-    estimates.update({"FastSLAM (mean)": result.mean_poses[rows], "FastSLAM (best particle)": result.best_poses[rows]})
-    truth = truth[rows]
-    corners = sidecars.read_map(map_file)["corners"] if map_file.exists() else np.empty((0, 2))
-    aligned = (apply_se2(align_se2(result.mean_poses[rows], truth), result.landmarks) if len(result.landmarks)
-               else result.landmarks)
-    table = error_table(estimates, truth)
-    table["mean_nees"] = np.nan
-    nees = normalized_estimation_error(result.mean_poses[rows], result.pose_covariances[rows], truth)
-    table.loc["FastSLAM (mean)", "mean_nees"] = float(np.nanmean(nees))
-    return table, {"as estimated": map_error(result.landmarks, corners, match_radius),
-                   "aligned": map_error(aligned, corners, match_radius)}
 
 
 def consistency(result: SlamResult) -> dict:

@@ -44,14 +44,12 @@ import numpy as np
 import pandas as pd
 from tqdm.auto import tqdm
 
-from mazeslam import log, sidecars
 from mazeslam.config import ConfigError
 from mazeslam.envs.simulator import SimulationConfig, load_config, simulate
-from mazeslam.evaluation.metrics import (
-    absolute_trajectory_error, align_se2, apply_se2, map_error, normalized_estimation_error, relative_pose_error,
-)
-from mazeslam.filters.motion import dead_reckoning
-from mazeslam.slam import SlamConfig, load_slam_config, slam_on_file
+from mazeslam.evaluation.metrics import apply_se2
+from mazeslam.evaluation.scoring import DEAD_RECKONING, FILTER_MEAN, score_run
+from mazeslam.loaded_run import load_run
+from mazeslam.slam import SlamConfig, load_slam_config, slam_on_run
 
 RESULTS = "runs.jsonl"
 MAPS = "maps"
@@ -182,45 +180,40 @@ def execute_run(sweep: Sweep, run: dict, maps_folder: str | None = None) -> dict
     with tempfile.TemporaryDirectory() as folder:
         simulated = simulate(Path(folder) / "run.log", simulation_config, sweep.maze, seed, sweep.duration,
                              progress=False)
-        started = time.perf_counter()
-        result = slam_on_file(simulated.log_path, slam_config, progress=False)
-        seconds = time.perf_counter() - started
-        course_log = log.read(simulated.log_path)
-        world = sidecars.read_map(simulated.map_path)
-    truth = simulated.poses
-    reckoned = dead_reckoning(course_log, world["start_pose"])
-    alignment = align_se2(result.mean_poses, truth)
-    aligned_map = apply_se2(alignment, result.landmarks) if len(result.landmarks) else result.landmarks
-    raw_map = map_error(result.landmarks, world["corners"], slam_config.evaluation.match_radius)
-    aligned_map_error = map_error(aligned_map, world["corners"], slam_config.evaluation.match_radius)
+        loaded = load_run(simulated.log_path, slam_config.sensor)
+    started = time.perf_counter()
+    result = slam_on_run(loaded, slam_config, progress=False)
+    seconds = time.perf_counter() - started
+    score = score_run(loaded, result, slam_config.evaluation.match_radius)
+    filter_row, reckoning_row = score.table.loc[FILTER_MEAN], score.table.loc[DEAD_RECKONING]
+    aligned_map_error = score.map_errors["aligned"]
+    particles = slam_config.fastslam.NPARTICLES
+    reports = result.reports
     row = {
         "run_id": run_id(sweep, run), "seed": seed, **{k: cell_label(v) for k, v in run["settings"].items()},
-        "ate_rmse": absolute_trajectory_error(result.mean_poses, truth)["rmse"],
-        "ate_aligned_rmse": absolute_trajectory_error(result.mean_poses, truth, align=True)["rmse"],
-        "reckoning_ate_rmse": absolute_trajectory_error(reckoned, truth)["rmse"],
-        "reckoning_ate_aligned_rmse": absolute_trajectory_error(reckoned, truth, align=True)["rmse"],
-        "rpe_trans_rmse": relative_pose_error(result.mean_poses, truth, 0.1)["trans_rmse"],
-        "rpe_rot_rmse": relative_pose_error(result.mean_poses, truth, 0.1)["rot_rmse"],
-        "map_rmse": raw_map["rmse"], "map_aligned_rmse": aligned_map_error["rmse"],
+        "ate_rmse": filter_row["ate_rmse"], "ate_aligned_rmse": filter_row["aligned_rmse"],
+        "reckoning_ate_rmse": reckoning_row["ate_rmse"], "reckoning_ate_aligned_rmse": reckoning_row["aligned_rmse"],
+        "rpe_trans_rmse": filter_row["rpe_trans_rmse"], "rpe_rot_rmse": filter_row["rpe_rot_rmse"],
+        "map_rmse": score.map_errors["as estimated"]["rmse"], "map_aligned_rmse": aligned_map_error["rmse"],
         "map_precision": aligned_map_error["precision"], "map_recall": aligned_map_error["recall"],
         "landmarks": len(result.landmarks),
         "spurious_landmarks": len(result.landmarks) - aligned_map_error["matched"],
-        "true_corners": len(world["corners"]),
-        "ess_median": float(np.median([r.effective_sample_size for r in result.reports])) if result.reports else np.nan,
-        "new_per_scan": float(np.mean([r.new for r in result.reports])) / slam_config.fastslam.NPARTICLES
-        if result.reports else np.nan,
-        "ambiguous_per_scan": float(np.mean([r.ambiguous for r in result.reports])) / slam_config.fastslam.NPARTICLES
-        if result.reports else np.nan,
-        "median_nees": float(np.nanmedian(normalized_estimation_error(result.mean_poses, result.pose_covariances, truth))),
-        "resamplings": result.resamplings, "scans": len(result.reports),
-        "slam_seconds": seconds, "log_seconds": course_log.duration,
-        "seconds_per_record": seconds / len(course_log),
+        "true_corners": len(loaded.true_corners),
+        "ess_median": float(np.median([r.effective_sample_size for r in reports])) if reports else np.nan,
+        "new_per_scan": float(np.mean([r.new for r in reports])) / particles if reports else np.nan,
+        "ambiguous_per_scan": float(np.mean([r.ambiguous for r in reports])) / particles if reports else np.nan,
+        "median_nees": filter_row["median_nees"],
+        "resamplings": result.resamplings, "scans": len(reports),
+        "slam_seconds": seconds, "log_seconds": loaded.log.duration,
+        "seconds_per_record": seconds / len(loaded.log),
     }
     if maps_folder is not None:
+        aligned_landmarks = apply_se2(score.alignment, result.landmarks) if len(result.landmarks) else result.landmarks
         Path(maps_folder, f"{row['run_id']}.json").write_text(json.dumps({
-            "landmarks": aligned_map.tolist(), "walls": world["walls"].tolist(), "corners": world["corners"].tolist(),
-            "trajectory": apply_se2(alignment, result.mean_poses)[:, :2].round(5).tolist(),
-            "truth": truth[:, :2].round(5).tolist()}))
+            "landmarks": aligned_landmarks.tolist(), "walls": loaded.walls.tolist(),
+            "corners": loaded.true_corners.tolist(),
+            "trajectory": apply_se2(score.alignment, result.mean_poses)[:, :2].round(5).tolist(),
+            "truth": loaded.truth[:, :2].round(5).tolist()}))
     return row
 
 

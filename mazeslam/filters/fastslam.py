@@ -19,20 +19,36 @@ State (all world frame, metres and radians):
 
 Observations are range and bearing ``z = (rho, phi)`` of a point landmark in the robot frame; the
 measurement model is ``h(x, m) = (|m - x|, atan2(m_y - y, m_x - x) - theta)``.
+
+The pieces are pure functions of their own modules: the EKF step (``ekf``), association
+(``association``), resampling (``resampling``) and the two proposals, FastSLAM 1.0's and 2.0's
+(``proposals``); this class holds the particles and runs them in order.
 """
 
 from __future__ import annotations
 
+import enum
 import math
 from dataclasses import dataclass
 
 import numpy as np
 
 from mazeslam.config import require
-from mazeslam.filters.motion import predict_odometry, predict_relative, relative_motion_covariance
-from mazeslam.geometry import advance_pose, compose, wrap_angle
+from mazeslam.filters import ekf
+from mazeslam.filters.association import associate_greedy, associate_known
+from mazeslam.filters.motion import OdometryNoise
+from mazeslam.filters.proposals import PROPOSALS
+from mazeslam.filters.resampling import effective_sample_size, normalized_weights, systematic_resample
+from mazeslam.geometry import wrap_angle
 
 LOG_TWO_PI = math.log(2 * math.pi)
+
+
+class Association(enum.StrEnum):
+    """How observations are matched to landmarks."""
+
+    UNKNOWN = "unknown"  #: maximum likelihood with a Mahalanobis gate
+    KNOWN = "known"  #: identities given with the observations
 
 
 @dataclass(frozen=True)
@@ -83,7 +99,7 @@ class FastSLAMParams:
     gate: float = 9.21
     new_landmark_gate: float = 16.0
     resample_threshold: float = 0.5
-    association: str = "unknown"
+    association: Association = Association.UNKNOWN
     view_range: float = 0.25
     tentative_limit: int = 3
     version: int = 1
@@ -91,16 +107,24 @@ class FastSLAMParams:
 
     def __post_init__(self):
         require(self.NPARTICLES >= 1, f"NPARTICLES must be at least 1, got {self.NPARTICLES}")
-        for name in ("sigmaX", "sigmaTH", "sigmaTH_drive", "sigmaR", "sigmaB"):
+        for name in ("sigmaR", "sigmaB"):
             require(getattr(self, name) >= 0, f"{name} must be >= 0, got {getattr(self, name)}")
+        self.odometry_noise  # checks the odometry terms
         require(self.sigmaR > 0 or self.use_observation_covariance,
                 "sigmaR must be positive unless use_observation_covariance is on")
         require(0 < self.gate <= self.new_landmark_gate,
                 f"need 0 < gate <= new_landmark_gate, got {self.gate} and {self.new_landmark_gate}")
         require(0 <= self.resample_threshold <= 1, f"resample_threshold must be in [0, 1], got {self.resample_threshold}")
-        require(self.association in ("unknown", "known"), f"association must be 'unknown' or 'known', got {self.association!r}")
+        require(self.association in tuple(Association),
+                f"association must be one of {', '.join(Association)}, got {self.association!r}")
+        object.__setattr__(self, "association", Association(self.association))
         require(self.view_range >= 0 and self.tentative_limit >= 1, "view_range must be >= 0 and tentative_limit >= 1")
-        require(self.version in (1, 2), f"version must be 1 or 2 (FastSLAM 1.0 or 2.0), got {self.version}")
+        require(self.version in PROPOSALS, f"version must be 1 or 2 (FastSLAM 1.0 or 2.0), got {self.version}")
+
+    @property
+    def odometry_noise(self) -> OdometryNoise:
+        """The odometry terms sigmaX, sigmaTH, sigmaTH_drive as one noise model."""
+        return OdometryNoise(self.sigmaX, self.sigmaTH, self.sigmaTH_drive)
 
 
 @dataclass
@@ -116,11 +140,43 @@ class UpdateReport:
     effective_sample_size: float = 0.0
 
 
+@dataclass
+class MeasurementModel:
+    """The measurement model of the first m landmark slots at the particles' current poses,
+    against one scan's K observations (each entry of a 2x2 matrix is its own array, for speed).
+
+    Attributes:
+        rho, bearing: (P, m) predicted range (m) and bearing (rad) of every slot.
+        h: the landmark Jacobian d(rho, bearing)/d(landmark) as entries (a, b, c, d), each (P, m).
+        nu: the innovations (range, bearing) of every observation-slot pair, each (P, K, m).
+        det, distance2: determinant and squared Mahalanobis distance of the innovation under
+            S = H Sigma H^T + R (+ Gx Sigma_x Gx^T with the pose's uncertainty), each (P, K, m);
+            distance2 is inf for empty slots.
+    """
+
+    rho: np.ndarray
+    bearing: np.ndarray
+    h: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]
+    nu: tuple[np.ndarray, np.ndarray]
+    det: np.ndarray
+    distance2: np.ndarray
+
+    def jacobians(self, rows: np.ndarray, slots: np.ndarray) -> np.ndarray:
+        """H (n, 2, 2) of the particle-slot pairs ``rows``, ``slots`` (n,) each."""
+        a, b, c, d = (entry[rows, slots] for entry in self.h)
+        return np.stack([np.stack([a, b], -1), np.stack([c, d], -1)], -2)
+
+
 class FastSLAM:
-    """The filter. ``predict`` with each odometry record, ``update`` with each scan's observations."""
+    """The filter. ``predict`` with each odometry record, ``update`` with each scan's observations.
+
+    The proposal (``params.version``: 1 ``MotionProposal``, 2 ``ObservationProposal``) decides when
+    a pose's noise is drawn; everything else is shared.
+    """
 
     def __init__(self, params: FastSLAMParams, start_pose=(0.0, 0.0, 0.0), capacity: int = 32):
         self.params = params
+        self.proposal = PROPOSALS[params.version]()
         self.rng = np.random.default_rng(params.seed)
         p = params.NPARTICLES
         self.poses = np.tile(np.asarray(start_pose, dtype=float), (p, 1))
@@ -142,54 +198,17 @@ class FastSLAM:
         without noise and accumulates the motion's covariance, to be combined with the next scan's
         observations (``update``) before a pose is drawn.
         """
-        p = self.params
-        if p.version == 1:
-            self.poses = predict_odometry(self.poses, distance, turn, p.sigmaX, p.sigmaTH, p.sigmaTH_drive, self.rng)
-            return
-        if distance == 0.0 and turn == 0.0:
-            return
-        heading = self.poses[:, 2] + 0.5 * turn
-        cos_h, sin_h = np.cos(heading), np.sin(heading)
-        count = len(self.poses)
-        # Jacobians of advance_pose with respect to the pose (F) and to (distance, turn) (V).
-        f = np.tile(np.eye(3), (count, 1, 1))
-        f[:, 0, 2], f[:, 1, 2] = -distance * sin_h, distance * cos_h
-        v = np.zeros((count, 3, 2))
-        v[:, 0, 0], v[:, 1, 0] = cos_h, sin_h
-        v[:, 0, 1], v[:, 1, 1], v[:, 2, 1] = -0.5 * distance * sin_h, 0.5 * distance * cos_h, 1.0
-        motion = np.diag([p.sigmaX**2 * abs(distance), p.sigmaTH**2 * abs(turn) + p.sigmaTH_drive**2 * abs(distance)])
-        self._carry_motion_covariance(f, v, motion)
-        self.poses = advance_pose(self.poses, distance, turn)
+        self.poses, self.pose_covariances = self.proposal.predict(
+            self.poses, self.pose_covariances, distance, turn, self.params.odometry_noise, self.rng)
 
     def predict_relative(self, increment) -> None:
         """Move every particle by a relative motion ``increment`` (dx, dy, dtheta) given in its own
-        robot frame (laser odometry), with the noise of ``relative_motion_covariance``.
-
-        As in ``predict``, FastSLAM 1.0 draws the noise now and FastSLAM 2.0 accumulates the
-        motion's covariance for the next scan's proposal.
-        """
-        p = self.params
+        robot frame (laser odometry), with the noise of ``OdometryNoise.relative_covariance``; the
+        proposal decides when the noise is drawn, as in ``predict``."""
         increment = np.asarray(increment, dtype=float)
-        motion = relative_motion_covariance(increment, p.sigmaX, p.sigmaTH, p.sigmaTH_drive)
-        if p.version == 1:
-            self.poses = predict_relative(self.poses, increment, motion, self.rng)
-            return
-        cos_t, sin_t = np.cos(self.poses[:, 2]), np.sin(self.poses[:, 2])
-        count = len(self.poses)
-        # Jacobians of compose(pose, increment) with respect to the pose (F) and the increment (V).
-        f = np.tile(np.eye(3), (count, 1, 1))
-        f[:, 0, 2] = -sin_t * increment[0] - cos_t * increment[1]
-        f[:, 1, 2] = cos_t * increment[0] - sin_t * increment[1]
-        v = np.tile(np.eye(3), (count, 1, 1))
-        v[:, 0, 0], v[:, 0, 1], v[:, 1, 0], v[:, 1, 1] = cos_t, -sin_t, sin_t, cos_t
-        self._carry_motion_covariance(f, v, motion)
-        self.poses = compose(self.poses, increment)
-
-    def _carry_motion_covariance(self, f: np.ndarray, v: np.ndarray, motion: np.ndarray) -> None:
-        """FastSLAM 2.0: propagate each particle's motion covariance through one motion, F Sigma F^T
-        + V Q V^T, with F (P, 3, 3) and V (P, 3, k) the motion's Jacobians with respect to the pose
-        and to its k noisy terms, and Q (k, k) their covariance."""
-        self.pose_covariances = f @ self.pose_covariances @ np.swapaxes(f, 1, 2) + v @ motion @ np.swapaxes(v, 1, 2)
+        covariance = self.params.odometry_noise.relative_covariance(increment)
+        self.poses, self.pose_covariances = self.proposal.predict_relative(
+            self.poses, self.pose_covariances, increment, covariance, self.rng)
 
     # -- observation model --------------------------------------------------------------------
     def _used_slots(self) -> int:
@@ -224,52 +243,58 @@ class FastSLAM:
             covariances: (K, 2, 2) their covariances, or None.
             ids: (K,) known landmark identities (``association="known"``; -1: none, the observation
                 is left out and counted as ambiguous), else None.
+        Steps: 1. associate (with the pose's uncertainty for FastSLAM 2.0); 2. draw the poses
+        (FastSLAM 2.0); 3. update matched landmarks, start new ones and weigh the particles;
+        4. drop tentative landmarks that were missed; 5. resample when the weights degenerate.
         """
         observations = np.asarray(observations, dtype=float).reshape(-1, 2)
         report = UpdateReport(observations=len(observations))
         count = len(observations)
-        if count and self.params.association == "known" and ids is None:
+        known = self.params.association == Association.KNOWN
+        if count and known and ids is None:
             raise ValueError("association='known' needs the observations' ids")
         while count and (~self.exists).sum(axis=1).min() < count:  # room for every observation to start a landmark
             self._grow()
         noise = self._noise(covariances, count)
         m = self._used_slots()
-        two = self.params.version == 2
-        prior = self._model(observations, noise, m, with_pose_uncertainty=two)
-        if self.params.association == "known" and count:
-            assigned = self._associate_known(np.asarray(ids), m)
+        # 1. Association, under the model the weights use.
+        prior = self._model(observations, noise, m, self.proposal.carries_pose_uncertainty)
+        if known and count:
+            assigned = associate_known(np.asarray(ids), self.ids[:, :m], self.exists[:, :m])
         else:
-            assigned = self._associate(prior["distance2"])
-        if two:
-            self._draw_poses(assigned, observations, noise)
-        model = self._model(observations, noise, m, with_pose_uncertainty=False) if two else prior
+            assigned = associate_greedy(prior.distance2, self.params.gate)
+        # 2. The proposal's draw; the landmarks are then corrected at the drawn poses.
+        model = prior
+        if self.proposal.carries_pose_uncertainty:
+            self.poses, self.pose_covariances = self.proposal.draw(
+                self.poses, self.pose_covariances, assigned, observations, self.means, self.covariances, noise,
+                self.rng)
+            model = self._model(observations, noise, m, with_pose_uncertainty=False)
+        # 3. Landmarks and weights, observation by observation.
         matched_now = np.zeros_like(self.exists)
         for k in range(count):
             self._apply(k, assigned[:, k], model, prior, observations[k], noise[k], ids, matched_now, report)
+        # 4. Tentative landmarks predicted in view but not seen.
         if count:
-            self._manage_landmarks(model["rho"], matched_now, report)
+            self._manage_landmarks(model.rho, matched_now, report)
+        # 5. Selective resampling.
         report.effective_sample_size = self.effective_sample_size()
         if report.effective_sample_size < self.params.resample_threshold * self.params.NPARTICLES:
             self.resample()
             report.resampled = True
         return report
 
-    def _model(self, observations: np.ndarray, noise: np.ndarray, m: int, with_pose_uncertainty: bool) -> dict:
-        """The measurement model of the first ``m`` slots at the current poses.
-
-        Returns a dict of arrays: ``rho``, ``bearing`` (P, m); ``h`` the landmark Jacobian's entries
-        (a, b, c, d), each (P, m); ``base`` the entries (00, 01, 11) of H Sigma H^T, each (P, m);
-        ``nu`` the innovations (range, bearing), each (P, K, m); ``det`` and ``distance2`` of
-        S = H Sigma H^T + R (+ Gx Sigma_x Gx^T with the pose's uncertainty), each (P, K, m).
-        """
+    def _model(self, observations: np.ndarray, noise: np.ndarray, m: int,
+               with_pose_uncertainty: bool) -> MeasurementModel:
+        """The measurement model of the first ``m`` slots at the current poses (see
+        ``MeasurementModel``); ``with_pose_uncertainty`` adds the motion covariance not yet drawn."""
         rho, bearing, h = self._predicted(m)
         a, b, c, d = h
         sigma = self.covariances[:, :m]
         s00, s01, s11 = sigma[..., 0, 0], sigma[..., 0, 1], sigma[..., 1, 1]
-        base = (a * a * s00 + 2 * a * b * s01 + b * b * s11,
-                a * c * s00 + (a * d + b * c) * s01 + b * d * s11,
-                c * c * s00 + 2 * c * d * s01 + d * d * s11)
-        t00, t01, t11 = base
+        t00 = a * a * s00 + 2 * a * b * s01 + b * b * s11
+        t01 = a * c * s00 + (a * d + b * c) * s01 + b * d * s11
+        t11 = c * c * s00 + 2 * c * d * s01 + d * d * s11
         if with_pose_uncertainty:
             gx = np.stack([np.stack([-a, -b, np.zeros_like(a)], -1), np.stack([-c, -d, -np.ones_like(a)], -1)], -2)
             pose_term = gx @ self.pose_covariances[:, None] @ np.swapaxes(gx, -1, -2)  # (P, m, 2, 2)
@@ -282,105 +307,31 @@ class FastSLAM:
         nu1 = wrap_angle(observations[None, :, 1, None] - bearing[:, None])
         distance2 = (t11 * nu0 * nu0 - 2 * t01 * nu0 * nu1 + t00 * nu1 * nu1) / det
         distance2[~np.broadcast_to(self.exists[:, None, :m], distance2.shape)] = np.inf
-        return {"rho": rho, "bearing": bearing, "h": h, "base": base, "nu": (nu0, nu1), "det": det,
-                "distance2": distance2}
+        return MeasurementModel(rho, bearing, h, (nu0, nu1), det, distance2)
 
-    def _draw_poses(self, assigned: np.ndarray, observations: np.ndarray, noise: np.ndarray) -> None:
-        """FastSLAM 2.0's proposal: each particle's motion Gaussian (mean ``poses``, covariance
-        ``pose_covariances``) is corrected by its associated observations, one EKF step each, and
-        the pose is drawn from the result."""
-        mean, covariance = self.poses.copy(), self.pose_covariances.copy()
-        for k in range(len(observations)):
-            rows = np.flatnonzero(assigned[:, k] >= 0)
-            if not len(rows):
-                continue
-            j = assigned[rows, k]
-            delta = self.means[rows, j] - mean[rows, :2]
-            dx, dy = delta[:, 0], delta[:, 1]
-            q = np.maximum(dx * dx + dy * dy, 1e-12)
-            rho = np.sqrt(q)
-            h = np.stack([np.stack([dx / rho, dy / rho], -1), np.stack([-dy / q, dx / q], -1)], -2)  # (n, 2, 2)
-            gx = np.concatenate([-h, np.stack([np.zeros(len(rows)), -np.ones(len(rows))], -1)[..., None]], -1)
-            q_matrix = h @ self.covariances[rows, j] @ np.swapaxes(h, -1, -2) + noise[k]
-            sigma = covariance[rows]
-            s = gx @ sigma @ np.swapaxes(gx, -1, -2) + q_matrix
-            gain = sigma @ np.swapaxes(gx, -1, -2) @ np.linalg.inv(s)  # (n, 3, 2)
-            nu = np.column_stack([observations[k, 0] - rho,
-                                  wrap_angle(observations[k, 1] - (np.arctan2(dy, dx) - mean[rows, 2]))])
-            mean[rows] += np.einsum("nij,nj->ni", gain, nu)
-            corrected = (np.eye(3) - gain @ gx) @ sigma
-            covariance[rows] = 0.5 * (corrected + np.swapaxes(corrected, -1, -2))
-        values, vectors = np.linalg.eigh(covariance)
-        draws = self.rng.standard_normal(mean.shape) * np.sqrt(np.clip(values, 0, None))
-        self.poses = mean + np.einsum("pij,pj->pi", vectors, draws)
-        self.poses[:, 2] = wrap_angle(self.poses[:, 2])
-        self.pose_covariances = np.zeros_like(covariance)
-
-    def _associate(self, distance2: np.ndarray) -> np.ndarray:
-        """Greedy one-to-one maximum-likelihood association per particle: (P, K) landmark slot or -1.
-
-        Repeatedly takes the closest (Mahalanobis) observation-landmark pair within the gate, so two
-        observations never update one landmark, and the second is not silently lost: it competes
-        for the next closest landmark or becomes new/ambiguous.
-        """
-        p, k, m = distance2.shape
-        assigned = np.full((p, k), -1)
-        if m == 0:
-            return assigned
-        remaining = distance2.copy()
-        rows = np.arange(p)
-        for _ in range(min(k, m)):
-            flat = remaining.reshape(p, -1).argmin(axis=1)
-            obs, slot = np.divmod(flat, m)
-            ok = remaining[rows, obs, slot] < self.params.gate
-            if not ok.any():
-                break
-            assigned[rows[ok], obs[ok]] = slot[ok]
-            remaining[rows[ok], obs[ok], :] = np.inf
-            remaining[rows[ok], :, slot[ok]] = np.inf
-        return assigned
-
-    def _associate_known(self, ids: np.ndarray, m: int) -> np.ndarray:
-        """(P, K) the slot (among the first m) holding each observation's identity, or -1."""
-        if m == 0:
-            return np.full((len(self.poses), len(ids)), -1)
-        match = (self.ids[:, None, :m] == ids[None, :, None]) & self.exists[:, None, :m] & (ids[None, :, None] >= 0)
-        return np.where(match.any(axis=2), match.argmax(axis=2), -1)
-
-    def _apply(self, k, slots, model, prior, observation, noise, ids, matched_now, report) -> None:
+    def _apply(self, k, slots, model: MeasurementModel, prior: MeasurementModel, observation, noise, ids,
+               matched_now, report) -> None:
         """EKF-update the landmarks matched by observation k, start new ones, and weigh the particles.
 
         ``model`` linearises at the poses the particles now have; ``prior`` is the model the
-        association used, whose Mahalanobis distances weigh the particles (the same dict for
-        FastSLAM 1.0; for 2.0 it includes the motion's uncertainty, before the pose was drawn).
+        association used, whose Mahalanobis distances weigh the particles (the same for FastSLAM
+        1.0; for 2.0 it includes the motion's uncertainty, before the pose was drawn).
         """
-        distance2 = prior["distance2"]
+        distance2 = prior.distance2
         rows = np.flatnonzero(slots >= 0)
         if len(rows):
             j = slots[rows]
-            h = np.stack([np.stack([model["h"][0][rows, j], model["h"][1][rows, j]], -1),
-                          np.stack([model["h"][2][rows, j], model["h"][3][rows, j]], -1)], -2)  # (n, 2, 2)
-            base00, base01, base11 = (entry[rows, j] for entry in model["base"])
-            t00, t01, t11 = base00 + noise[0, 0], base01 + noise[0, 1], base11 + noise[1, 1]
-            det = t00 * t11 - t01 * t01
-            s_inv = np.stack([np.stack([t11, -t01], -1), np.stack([-t01, t00], -1)], -2) / det[:, None, None]
-            sigma = self.covariances[rows, j]
-            gain = sigma @ np.swapaxes(h, -1, -2) @ s_inv  # (n, 2, 2)
-            nu = np.column_stack([model["nu"][0][rows, k, j], model["nu"][1][rows, k, j]])
-            self.means[rows, j] += np.einsum("nij,nj->ni", gain, nu)
-            identity_minus = np.eye(2) - gain @ h
-            # Joseph form keeps the covariance symmetric and positive definite.
-            self.covariances[rows, j] = (identity_minus @ sigma @ np.swapaxes(identity_minus, -1, -2)
-                                         + gain @ noise @ np.swapaxes(gain, -1, -2))
-            self.log_weights[rows] += (-0.5 * distance2[rows, k, j] - LOG_TWO_PI
-                                       - 0.5 * np.log(prior["det"][rows, k, j]))
+            residual = np.column_stack([model.nu[0][rows, k, j], model.nu[1][rows, k, j]])
+            self.means[rows, j], self.covariances[rows, j], _ = ekf.update(
+                self.means[rows, j], self.covariances[rows, j], residual, model.jacobians(rows, j), noise)
+            self.log_weights[rows] += (-0.5 * distance2[rows, k, j] - LOG_TWO_PI - 0.5 * np.log(prior.det[rows, k, j]))
             self.seen[rows, j] += 1
             self.missed[rows, j] = 0
             matched_now[rows, j] = True
             report.matched += len(rows)
         unmatched = slots < 0
         nearest = distance2[:, k].min(axis=1, initial=np.inf)
-        if self.params.association == "known":  # an identity not yet mapped starts a landmark; none (-1): left out
+        if self.params.association == Association.KNOWN:  # an identity not yet mapped starts a landmark; none (-1): left out
             new = unmatched & (ids[k] >= 0)
         else:
             new = unmatched & (nearest >= self.params.new_landmark_gate)
@@ -431,26 +382,18 @@ class FastSLAM:
 
     # -- weights ------------------------------------------------------------------------------
     def weights(self) -> np.ndarray:
-        """Normalised particle weights (P,), computed in log space: never NaN, even if every
-        likelihood underflows."""
-        shifted = self.log_weights - self.log_weights.max()
-        weights = np.exp(shifted)
-        return weights / weights.sum()
+        """Normalised particle weights (P,)."""
+        return normalized_weights(self.log_weights)
 
     def effective_sample_size(self) -> float:
-        weights = self.weights()
-        return float(1.0 / np.sum(weights**2))
+        return effective_sample_size(self.weights())
 
     def resample(self) -> None:
         """Low-variance (systematic) resampling; weights become uniform."""
-        p = self.params.NPARTICLES
-        positions = (self.rng.random() + np.arange(p)) / p
-        cumulative = np.cumsum(self.weights())
-        cumulative[-1] = 1.0
-        index = np.searchsorted(cumulative, positions)
+        index = systematic_resample(self.weights(), self.rng)
         for name in ("poses", "means", "covariances", "exists", "seen", "missed", "ids", "pose_covariances"):
             setattr(self, name, getattr(self, name)[index])
-        self.log_weights = np.full(p, -math.log(p))
+        self.log_weights = np.full(len(index), -math.log(len(index)))
         self.resamplings += 1
 
     # -- estimates ----------------------------------------------------------------------------

@@ -19,41 +19,63 @@ sigmaX along and across the heading, sigmaTH and sigmaTH_drive on the heading.
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 
+from mazeslam.config import require
 from mazeslam.geometry import advance_pose, compose
 from mazeslam.log import CourseLog
 
 
-def predict_odometry(poses: np.ndarray, distance: float, turn: float, sigma_x: float, sigma_th: float,
-                     sigma_th_drive: float, rng: np.random.Generator) -> np.ndarray:
+@dataclass(frozen=True)
+class OdometryNoise:
+    """How uncertain an odometry increment is; named as in the exercise's control_panel.m.
+
+    Attributes:
+        sigmaX: distance noise, m per sqrt(m) travelled.
+        sigmaTH: heading noise from turning, rad per sqrt(rad) turned.
+        sigmaTH_drive: heading noise from driving, rad per sqrt(m) travelled.
+    """
+
+    sigmaX: float
+    sigmaTH: float
+    sigmaTH_drive: float
+
+    def __post_init__(self):
+        for name in ("sigmaX", "sigmaTH", "sigmaTH_drive"):
+            require(getattr(self, name) >= 0, f"{name} must be >= 0, got {getattr(self, name)}")
+
+    def increment_covariance(self, distance: float, turn: float) -> np.ndarray:
+        """Covariance (2, 2) of an odometry increment (distance m, turn rad): diagonal,
+        ``sigmaX^2 |d|`` and ``sigmaTH^2 |turn| + sigmaTH_drive^2 |d|``."""
+        return np.diag([self.sigmaX**2 * abs(distance),
+                        self.sigmaTH**2 * abs(turn) + self.sigmaTH_drive**2 * abs(distance)])
+
+    def relative_covariance(self, increment: np.ndarray) -> np.ndarray:
+        """Covariance (3, 3) of a relative motion ``increment`` (dx, dy, dth) in the robot frame it
+        starts from: ``sigmaX^2 d`` along and across the heading, ``sigmaTH^2 |dth| + sigmaTH_drive^2 d``
+        on the heading, d the distance travelled (m)."""
+        distance = float(np.hypot(increment[0], increment[1]))
+        position = self.sigmaX**2 * distance
+        return np.diag([position, position, self.sigmaTH**2 * abs(increment[2]) + self.sigmaTH_drive**2 * distance])
+
+
+def predict_odometry(poses: np.ndarray, distance: float, turn: float, noise: OdometryNoise,
+                     rng: np.random.Generator) -> np.ndarray:
     """Particles ``poses`` (P, 3) moved by one odometry increment with motion-proportional noise.
 
     Args:
         distance, turn: the increment, metres and radians.
-        sigma_x: distance noise, m per sqrt(m) travelled.
-        sigma_th: heading noise from turning, rad per sqrt(rad) turned.
-        sigma_th_drive: heading noise from driving, rad per sqrt(m) travelled.
+        noise: the increment's noise model.
         rng: the source of the noise (2 P normal draws per moving increment).
     Returns the new poses (P, 3), world frame.
     """
     if distance == 0.0 and turn == 0.0:
         return poses
-    count = len(poses)
-    distance_std = sigma_x * np.sqrt(abs(distance))
-    turn_std = np.sqrt(sigma_th**2 * abs(turn) + sigma_th_drive**2 * abs(distance))
-    noise = rng.standard_normal((2, count))
-    return advance_pose(poses, distance + distance_std * noise[0], turn + turn_std * noise[1])
-
-
-def relative_motion_covariance(increment: np.ndarray, sigma_x: float, sigma_th: float,
-                               sigma_th_drive: float) -> np.ndarray:
-    """Covariance (3, 3) of a relative motion ``increment`` (dx, dy, dth) in the robot frame it
-    starts from: ``sigma_x^2 d`` along and across the heading, ``sigma_th^2 |dth| + sigma_th_drive^2 d``
-    on the heading, d the distance travelled (m). Units as in ``predict_odometry``."""
-    distance = float(np.hypot(increment[0], increment[1]))
-    position = sigma_x**2 * distance
-    return np.diag([position, position, sigma_th**2 * abs(increment[2]) + sigma_th_drive**2 * distance])
+    variances = np.diag(noise.increment_covariance(distance, turn))
+    draws = rng.standard_normal((2, len(poses))) * np.sqrt(variances)[:, None]
+    return advance_pose(poses, distance + draws[0], turn + draws[1])
 
 
 def predict_relative(poses: np.ndarray, increment: np.ndarray, covariance: np.ndarray,

@@ -31,7 +31,7 @@ from scipy.spatial import cKDTree
 from mazeslam.beams import BeamGeometry
 from mazeslam.config import require
 from mazeslam.filters.correlative import CorrelativeParams, LikelihoodGrid, correlative_candidates
-from mazeslam.filters.motion import relative_motion_covariance
+from mazeslam.filters.motion import OdometryNoise
 from mazeslam.geometry import advance_pose, compose, transform_points, wrap_angle
 from mazeslam.log import CourseLog
 
@@ -52,8 +52,9 @@ class ScanMatchParams:
         iterations_per_stage: Gauss-Newton iterations at each correspondence distance.
         min_overlap: a match is accepted when at least this fraction of the current scan's points
             lies within the last correspondence distance of the previous scan.
-        odometry_sigma_x, odometry_sigma_th, odometry_sigma_th_drive: the prior's noise from wheel
-            odometry, in the terms of ``FastSLAMParams`` (m/sqrt(m), rad/sqrt(rad), rad/sqrt(m)).
+        odometry_prior: the prior's noise from wheel odometry (``[scan_matching.odometry_prior]``,
+            the terms of ``[fastslam]``: sigmaX m/sqrt(m), sigmaTH rad/sqrt(rad), sigmaTH_drive
+            rad/sqrt(m)); wider than the filter's, as the match only needs a starting point.
         prior_floor: smallest prior standard deviation, m and rad (a robot that reports no motion
             may still have moved a little).
         blind_sigma_xy, blind_sigma_th: the constant-velocity prior's standard deviation where a log
@@ -70,9 +71,7 @@ class ScanMatchParams:
     correspondence_distances: tuple = (1.0, 0.5, 0.3, 0.2)
     iterations_per_stage: int = 5
     min_overlap: float = 0.5
-    odometry_sigma_x: float = 0.05
-    odometry_sigma_th: float = 0.1
-    odometry_sigma_th_drive: float = 0.05
+    odometry_prior: OdometryNoise = field(default_factory=lambda: OdometryNoise(0.05, 0.1, 0.05))
     prior_floor: float = 0.01
     blind_sigma_xy: float = 1.0
     blind_sigma_th: float = 0.7
@@ -88,8 +87,6 @@ class ScanMatchParams:
                 "correspondence_distances must be positive distances (m)")
         require(self.iterations_per_stage >= 1, "iterations_per_stage must be at least 1")
         require(0 <= self.min_overlap <= 1, "min_overlap must be a fraction in [0, 1]")
-        require(min(self.odometry_sigma_x, self.odometry_sigma_th, self.odometry_sigma_th_drive) >= 0,
-                "odometry noise must not be negative")
         require(self.prior_floor > 0 and self.blind_sigma_xy > 0 and self.blind_sigma_th > 0,
                 "prior_floor, blind_sigma_xy and blind_sigma_th must be positive")
 
@@ -223,11 +220,9 @@ def wheel_motion(course_log: CourseLog, first: int, last: int) -> tuple[np.ndarr
 
 
 def odometry_prior_covariance(motion: np.ndarray, params: ScanMatchParams) -> np.ndarray:
-    """Covariance (3, 3) of a wheel-odometry motion (dx, dy, dtheta): ``relative_motion_covariance``
-    with the prior's noise, at least ``prior_floor`` in each term."""
-    covariance = relative_motion_covariance(motion, params.odometry_sigma_x, params.odometry_sigma_th,
-                                            params.odometry_sigma_th_drive)
-    return covariance + params.prior_floor**2 * np.eye(3)
+    """Covariance (3, 3) of a wheel-odometry motion (dx, dy, dtheta) under the prior's noise
+    (``OdometryNoise.relative_covariance``), at least ``prior_floor`` in each term."""
+    return params.odometry_prior.relative_covariance(motion) + params.prior_floor**2 * np.eye(3)
 
 
 def laser_odometry(course_log: CourseLog, geometry: BeamGeometry, params: ScanMatchParams) -> LaserOdometry:

@@ -1,0 +1,111 @@
+"""Where FastSLAM draws each particle's pose from: its two proposal distributions.
+
+``MotionProposal`` (FastSLAM 1.0, the exercise's): the pose is drawn from the motion model when the
+robot moves; the scan only weighs it. ``ObservationProposal`` (FastSLAM 2.0, Montemerlo et al.
+2003): the motion's mean and covariance are carried until the next scan, corrected there by the
+scan's associated observations, and the pose is drawn from that Gaussian; this keeps particles alive
+when the sensor is much more precise than the odometry.
+
+Both work on the particle arrays they are given and return new ones:
+    poses             (P, 3)     x, y (m), theta (rad), world frame
+    pose_covariances  (P, 3, 3)  the motion's covariance not yet drawn (zeros for FastSLAM 1.0)
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from mazeslam.filters import ekf
+from mazeslam.filters.motion import OdometryNoise, predict_odometry, predict_relative
+from mazeslam.geometry import advance_pose, compose, wrap_angle
+
+
+class MotionProposal:
+    """FastSLAM 1.0: draw the motion noise as the robot moves; observations only weigh."""
+
+    #: The weights' predictive covariance holds no pose uncertainty: the pose is already drawn.
+    carries_pose_uncertainty = False
+
+    def predict(self, poses, pose_covariances, distance: float, turn: float, noise: OdometryNoise,
+                rng: np.random.Generator):
+        """Move by an odometry increment (m, rad), drawing each particle's noise now."""
+        return predict_odometry(poses, distance, turn, noise, rng), pose_covariances
+
+    def predict_relative(self, poses, pose_covariances, increment: np.ndarray, covariance: np.ndarray,
+                         rng: np.random.Generator):
+        """Move by a robot-frame motion (dx, dy, dth) with covariance (3, 3), drawing the noise now."""
+        return predict_relative(poses, increment, covariance, rng), pose_covariances
+
+    def draw(self, poses, pose_covariances, assigned, observations, means, covariances, noise, rng):
+        """Nothing left to draw: the poses already hold their motion noise."""
+        return poses, pose_covariances
+
+
+class ObservationProposal:
+    """FastSLAM 2.0: carry the motion's Gaussian to the scan, correct it by the observations, draw."""
+
+    #: The weights' predictive covariance includes the pose's (motion) uncertainty.
+    carries_pose_uncertainty = True
+
+    def predict(self, poses, pose_covariances, distance: float, turn: float, noise: OdometryNoise,
+                rng: np.random.Generator):
+        """Move the means by an odometry increment (m, rad) and propagate the covariance,
+        F Sigma F^T + V Q V^T with the Jacobians of ``advance_pose`` w.r.t. the pose (F) and to
+        (distance, turn) (V)."""
+        if distance == 0.0 and turn == 0.0:
+            return poses, pose_covariances
+        heading = poses[:, 2] + 0.5 * turn
+        cos_h, sin_h = np.cos(heading), np.sin(heading)
+        f = np.tile(np.eye(3), (len(poses), 1, 1))
+        f[:, 0, 2], f[:, 1, 2] = -distance * sin_h, distance * cos_h
+        v = np.zeros((len(poses), 3, 2))
+        v[:, 0, 0], v[:, 1, 0] = cos_h, sin_h
+        v[:, 0, 1], v[:, 1, 1], v[:, 2, 1] = -0.5 * distance * sin_h, 0.5 * distance * cos_h, 1.0
+        covariance = _propagate(pose_covariances, f, v, noise.increment_covariance(distance, turn))
+        return advance_pose(poses, distance, turn), covariance
+
+    def predict_relative(self, poses, pose_covariances, increment: np.ndarray, covariance: np.ndarray,
+                         rng: np.random.Generator):
+        """Move the means by a robot-frame motion (dx, dy, dth) and propagate the covariance through
+        the Jacobians of ``compose(pose, increment)`` w.r.t. the pose (F) and the increment (V)."""
+        cos_t, sin_t = np.cos(poses[:, 2]), np.sin(poses[:, 2])
+        f = np.tile(np.eye(3), (len(poses), 1, 1))
+        f[:, 0, 2] = -sin_t * increment[0] - cos_t * increment[1]
+        f[:, 1, 2] = cos_t * increment[0] - sin_t * increment[1]
+        v = np.tile(np.eye(3), (len(poses), 1, 1))
+        v[:, 0, 0], v[:, 0, 1], v[:, 1, 0], v[:, 1, 1] = cos_t, -sin_t, sin_t, cos_t
+        return compose(poses, increment), _propagate(pose_covariances, f, v, covariance)
+
+    def draw(self, poses, pose_covariances, assigned, observations, means, covariances, noise, rng):
+        """Correct each particle's motion Gaussian by its associated observations (one EKF step
+        each, in turn) and draw the pose from the result.
+
+        Args:
+            assigned: (P, K) the landmark slot each observation is associated with (-1: none).
+            observations: (K, 2) range (m) and bearing (rad) in the robot frame.
+            means, covariances: (P, M, 2) and (P, M, 2, 2) every particle's landmarks.
+            noise: (K, 2, 2) the observations' noise R.
+        Returns the drawn poses (P, 3) and zeroed pose covariances.
+        """
+        mean, covariance = poses.copy(), pose_covariances.copy()
+        for k, observation in enumerate(observations):
+            rows = np.flatnonzero(assigned[:, k] >= 0)
+            if not len(rows):
+                continue
+            slots = assigned[rows, k]
+            z_hat, h_landmark, h_pose = ekf.range_bearing(mean[rows], means[rows, slots])
+            landmark_noise = h_landmark @ covariances[rows, slots] @ np.swapaxes(h_landmark, -1, -2) + noise[k]
+            mean[rows], covariance[rows], _ = ekf.update(mean[rows], covariance[rows],
+                                                         ekf.innovation(observation, z_hat), h_pose, landmark_noise)
+        drawn = ekf.sample_gaussians(mean, covariance, rng)
+        drawn[:, 2] = wrap_angle(drawn[:, 2])
+        return drawn, np.zeros_like(covariance)
+
+
+def _propagate(covariance: np.ndarray, f: np.ndarray, v: np.ndarray, motion: np.ndarray) -> np.ndarray:
+    """F Sigma F^T + V Q V^T: each particle's covariance (P, 3, 3) through one motion with
+    Jacobians F (P, 3, 3) w.r.t. the pose and V (P, 3, k) w.r.t. its k noisy terms, Q (k, k)."""
+    return f @ covariance @ np.swapaxes(f, 1, 2) + v @ motion @ np.swapaxes(v, 1, 2)
+
+
+PROPOSALS = {1: MotionProposal, 2: ObservationProposal}

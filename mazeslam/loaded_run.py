@@ -1,0 +1,101 @@
+"""A loaded run: one log and everything beside it, read once and passed on.
+
+The filter, the reports, the sweeps and the figures all need the same facts about a log: its
+records, the beam geometry its scans were taken with, where the robot started, and - for simulated
+or referenced logs - the truth and the world's map. ``load_run`` reads them once; nothing
+downstream opens a sidecar again.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from mazeslam import log, sidecars
+from mazeslam.beams import EXERCISE_CONVENTION, BeamGeometry, SensorOverrides
+
+
+@dataclass(frozen=True)
+class LoadedRun:
+    """One log with its sidecars.
+
+    Attributes:
+        path: the log file.
+        log: its records.
+        geometry: the beam geometry of its scans; geometry_origin says where it came from (the
+            map sidecar, the exercise's convention assumed, overrides), for messages.
+        start_pose: (3,) world pose the robot started at (the map sidecar's, else the origin).
+        truth: (R, 3) the true (or reference) pose at every record, or None without a truth sidecar.
+        world: the map sidecar (walls (W, 4), corners (K, 2), sensor, ...), or None.
+    """
+
+    path: Path
+    log: log.CourseLog
+    geometry: BeamGeometry
+    geometry_origin: str
+    start_pose: np.ndarray
+    truth: np.ndarray | None = None
+    world: dict | None = None
+
+    @property
+    def name(self) -> str:
+        """The log's file name without its extension (``runs/demo.log`` -> ``demo``)."""
+        return self.path.stem
+
+    @property
+    def geometry_from_sidecar(self) -> bool:
+        """The beam geometry was recorded beside the log (not assumed)."""
+        return self.geometry_origin.startswith("sidecar")
+
+    @property
+    def true_corners(self) -> np.ndarray:
+        """(K, 2) the world's true corners (empty without a map sidecar), metres."""
+        return self.world["corners"] if self.world is not None else np.empty((0, 2))
+
+    @property
+    def walls(self) -> np.ndarray | None:
+        """(W, 4) wall segments x1, y1, x2, y2 of the map sidecar, metres, or None."""
+        return self.world["walls"] if self.world is not None else None
+
+    @property
+    def truth_label(self) -> str:
+        """How figures and tables name the truth: a reference (CARMEN's corrected poses) is not truth."""
+        return (self.world or {}).get("truth_kind", "ground truth")
+
+    @property
+    def truth_is_reference(self) -> bool:
+        return self.truth_label.startswith("reference")
+
+    def glitches(self, jump_tolerance: float) -> np.ndarray:
+        """Record indices (G,) of the odometry records travelling more than ``jump_tolerance``
+        metres in one step (the exercise's TOL_JMP): glitches, left out of the motion."""
+        distance = np.abs(self.log.increments[:, 0])
+        return np.flatnonzero(self.log.is_odometry & (distance > jump_tolerance))
+
+
+def load_run(path: str | Path, sensor: SensorOverrides | None = None, strict: bool = True) -> LoadedRun:
+    """Read a course log and its sidecars (``run.truth.csv``, ``run.map.json``) once.
+
+    The beam geometry comes from the map sidecar, else the exercise's convention is assumed;
+    ``sensor`` replaces the parts it gives. ``strict=False`` skips bad log lines (reported in
+    ``log.skipped``) instead of stopping.
+    """
+    path = Path(path)
+    course_log = log.read(path, strict=strict)
+    map_file, truth_file = sidecars.map_path(path), sidecars.truth_path(path)
+    world = sidecars.read_map(map_file) if map_file.exists() else None
+    truth = sidecars.read_truth(truth_file)[1] if truth_file.exists() else None
+    if truth is not None and len(truth) != len(course_log):
+        raise ValueError(f"{truth_file}: {len(truth)} poses for the {len(course_log)} records of {path}")
+    if world is not None:
+        geometry, origin = sidecars.beam_geometry(world["sensor"]), f"sidecar {map_file}"
+    else:
+        geometry, origin = EXERCISE_CONVENTION, "assumed: the exercise's convention (no sidecar)"
+    sensor = sensor or SensorOverrides()
+    if sensor.given():
+        geometry, origin = sensor.apply(geometry), f"{origin}, overridden by {', '.join(sorted(sensor.given()))}"
+    start = (world or {}).get("start_pose")
+    start_pose = np.asarray(start if start is not None else (0.0, 0.0, 0.0), dtype=float)
+    return LoadedRun(path, course_log, geometry, origin, start_pose, truth, world)

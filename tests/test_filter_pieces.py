@@ -1,0 +1,98 @@
+"""The pure functions FastSLAM is built of, each against a hand-computed case."""
+
+import math
+
+import numpy as np
+import pytest
+
+from mazeslam.filters import ekf
+from mazeslam.filters.association import associate_greedy, associate_known
+from mazeslam.filters.proposals import MotionProposal, ObservationProposal
+from mazeslam.filters.motion import OdometryNoise
+from mazeslam.filters.resampling import effective_sample_size, normalized_weights, systematic_resample
+
+
+def test_ekf_update_of_a_scalar_is_the_weighted_average():
+    # Prior N(1, 4), measurement 3 with variance 1 of the state itself: posterior mean 1 + 4/5 * 2, variance 4/5.
+    mean, covariance, s = ekf.update(np.array([[1.0]]), np.array([[[4.0]]]), np.array([[2.0]]),
+                                     np.array([[[1.0]]]), np.array([[1.0]]))
+    assert mean[0, 0] == pytest.approx(2.6)
+    assert covariance[0, 0, 0] == pytest.approx(0.8)
+    assert s[0, 0, 0] == pytest.approx(5.0)
+
+
+def test_range_bearing_jacobians_match_finite_differences():
+    rng = np.random.default_rng(0)
+    poses = rng.normal(size=(5, 3))
+    landmarks = poses[:, :2] + rng.uniform(0.2, 1.0, (5, 2))
+    z_hat, h_landmark, h_pose = ekf.range_bearing(poses, landmarks)
+    step = 1e-7
+    for axis in range(3):
+        moved = poses.copy()
+        moved[:, axis] += step
+        numeric = ekf.innovation(ekf.range_bearing(moved, landmarks)[0], z_hat) / step
+        np.testing.assert_allclose(numeric, h_pose[:, :, axis], atol=1e-5)
+    for axis in range(2):
+        moved = landmarks.copy()
+        moved[:, axis] += step
+        numeric = ekf.innovation(ekf.range_bearing(poses, moved)[0], z_hat) / step
+        np.testing.assert_allclose(numeric, h_landmark[:, :, axis], atol=1e-5)
+
+
+def test_weights_and_effective_sample_size():
+    weights = normalized_weights(np.log(np.array([1.0, 1.0, 2.0])) - 1000.0)  # underflow-proof
+    np.testing.assert_allclose(weights, [0.25, 0.25, 0.5])
+    assert effective_sample_size(weights) == pytest.approx(1 / (0.0625 * 2 + 0.25))
+    assert effective_sample_size(np.full(4, 0.25)) == pytest.approx(4.0)
+
+
+def test_systematic_resampling_keeps_each_particle_in_proportion_to_its_weight():
+    weights = np.array([0.5, 0.25, 0.125, 0.125])
+    counts = np.bincount(systematic_resample(weights, np.random.default_rng(3)), minlength=4)
+    # Systematic resampling gives each particle floor(P w) or ceil(P w) copies: here exactly 2, 1, 0-1, 0-1.
+    assert counts[0] == 2 and counts[1] == 1 and counts.sum() == 4
+
+
+def test_greedy_association_is_one_to_one_and_gated():
+    inf = np.inf
+    # Two observations both nearest to slot 0; the closer takes it, the other falls back to slot 1.
+    distance2 = np.array([[[1.0, 5.0], [0.5, 3.0]]])
+    np.testing.assert_array_equal(associate_greedy(distance2, gate=9.0), [[1, 0]])
+    # Beyond the gate: unmatched.
+    np.testing.assert_array_equal(associate_greedy(np.array([[[10.0, inf]]]), gate=9.0), [[-1]])
+
+
+def test_known_association_finds_the_slot_of_each_identity():
+    slot_ids = np.array([[7, 3, -1], [3, 7, 5]])
+    exists = np.array([[True, True, False], [True, True, True]])
+    assigned = associate_known(np.array([3, 5, -1]), slot_ids, exists)
+    np.testing.assert_array_equal(assigned, [[1, -1, -1], [0, 2, -1]])
+
+
+def test_the_observation_proposal_draws_from_the_corrected_motion_gaussian():
+    # A pose known to 0.1 m in x and y sees a landmark known exactly; the draw must be pulled to
+    # where the observation puts the robot, and its spread shrunk below the motion's.
+    count = 4000
+    poses = np.tile([0.05, 0.0, 0.0], (count, 1))
+    covariances = np.tile(np.diag([0.01, 0.01, 1e-6]), (count, 1, 1))
+    landmark = np.array([1.0, 0.0])
+    observation = np.array([[1.0, 0.0]])  # seen 1 m straight ahead: the robot is at the origin
+    drawn, carried = ObservationProposal().draw(
+        poses, covariances, np.zeros((count, 1), dtype=int), observation, np.tile(landmark, (count, 1, 1)),
+        np.zeros((count, 1, 2, 2)), np.array([np.diag([1e-4, 1e-4])]), np.random.default_rng(5))
+    # Along x: prior variance 0.01, measurement variance 1e-4 -> posterior mean 0.05 * 1e-4 / 0.0101.
+    assert drawn[:, 0].mean() == pytest.approx(0.05 * 1e-4 / 0.0101, abs=2e-4)
+    assert drawn[:, 0].std() == pytest.approx(math.sqrt(0.01 * 1e-4 / 0.0101), rel=0.05)
+    np.testing.assert_array_equal(carried, 0.0)
+
+
+def test_the_motion_proposal_draws_when_moving_and_carries_nothing():
+    poses, covariances = np.zeros((2000, 3)), np.zeros((2000, 3, 3))
+    moved, carried = MotionProposal().predict(poses, covariances, 0.25, 0.0, OdometryNoise(0.02, 0.0, 0.0),
+                                              np.random.default_rng(1))
+    assert moved[:, 0].std() == pytest.approx(0.02 * 0.5, rel=0.05)
+    np.testing.assert_array_equal(carried, 0.0)
+    means, spread = ObservationProposal().predict(poses, covariances, 0.25, 0.0, OdometryNoise(0.02, 0.0, 0.0),
+                                                  np.random.default_rng(1))
+    np.testing.assert_allclose(means[:, 0], 0.25)
+    assert spread[0, 0, 0] == pytest.approx(0.02**2 * 0.25)

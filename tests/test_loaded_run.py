@@ -1,0 +1,29 @@
+"""A loaded run reads a log and its sidecars once, with the beam geometry it was recorded with."""
+
+import numpy as np
+
+from mazeslam import log, sidecars
+from mazeslam.beams import EXERCISE_CONVENTION, SensorOverrides
+from mazeslam.loaded_run import load_run
+
+
+def test_a_simulated_run_has_its_truth_map_start_and_geometry(default_run):
+    run = load_run(default_run.log_path)
+    assert len(run.truth) == len(run.log)
+    np.testing.assert_allclose(run.truth, sidecars.read_truth(default_run.truth_path)[1])
+    world = sidecars.read_map(default_run.map_path)
+    np.testing.assert_allclose(run.start_pose, world["start_pose"])
+    np.testing.assert_allclose(run.true_corners, world["corners"])
+    assert run.geometry == sidecars.beam_geometry(world["sensor"]) and run.geometry_from_sidecar
+
+
+def test_a_bare_log_starts_at_the_origin_with_the_exercise_convention_and_overrides(tmp_path):
+    path = tmp_path / "bare.log"
+    path.write_text("0.0 0 0.01 0.0 -1 -1\n0.1 1 0.5 0.6 0.7 0.8\n0.2 0 0.5 0.0 -1 -1\n")
+    run = load_run(path, SensorOverrides(first_beam_angle=0.0))
+    assert run.truth is None and run.world is None and len(run.true_corners) == 0
+    np.testing.assert_array_equal(run.start_pose, [0.0, 0.0, 0.0])
+    assert run.geometry.first_beam_angle == 0.0 and run.geometry.direction == EXERCISE_CONVENTION.direction
+    assert "overridden by first_beam_angle" in run.geometry_origin
+    np.testing.assert_array_equal(run.glitches(jump_tolerance=0.1), [2])  # the 0.5 m odometry step
+    assert isinstance(run.log, log.CourseLog)
