@@ -75,9 +75,9 @@ def run() -> list[dict]:
         {"benchmark": f"update+predict, {PARTICLES} particles, 40 scans", "vectorised_s": vectorised,
          "python_loop_s": loop, "speedup": loop / vectorised, "target": TARGET_SPEEDUP,
          "met": loop / vectorised >= TARGET_SPEEDUP},
-        {"benchmark": f"default run, {PARTICLES} particles", "log_s": course_log.duration, "wall_clock_s": elapsed,
-         "real_time_factor": course_log.duration / elapsed, "peak_memory_mb": peak / 2**20,
-         "target": TARGET_REAL_TIME, "met": course_log.duration / elapsed >= TARGET_REAL_TIME},
+        {"benchmark": f"default run, {PARTICLES} particles", "log_s": loaded.log.duration, "wall_clock_s": elapsed,
+         "real_time_factor": loaded.log.duration / elapsed, "peak_memory_mb": peak / 2**20,
+         "target": TARGET_REAL_TIME, "met": loaded.log.duration / elapsed >= TARGET_REAL_TIME},
     ]
 
 

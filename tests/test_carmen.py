@@ -146,7 +146,6 @@ def imported(name, tmp_path):
 def test_laser_odometry_on_real_scans_beats_the_wheels(name, scans, tmp_path):
     """The first ``scans`` scans of a real building: laser odometry against the reference poses
     ends up well inside the wheel odometry's error (orebro's log has no wheel odometry at all)."""
-    from mazeslam import log, sidecars
     from mazeslam.evaluation.metrics import absolute_trajectory_error
     from mazeslam.filters.motion import dead_reckoning
     from mazeslam.filters.scan_matching import laser_odometry
