@@ -109,7 +109,7 @@ class FastSLAMParams:
         require(self.NPARTICLES >= 1, f"NPARTICLES must be at least 1, got {self.NPARTICLES}")
         for name in ("sigmaR", "sigmaB"):
             require(getattr(self, name) >= 0, f"{name} must be >= 0, got {getattr(self, name)}")
-        OdometryNoise(self.sigmaX, self.sigmaTH, self.sigmaTH_drive)  # checks the odometry terms  # noqa: B018
+        OdometryNoise(self.sigmaX, self.sigmaTH, self.sigmaTH_drive)  # checks the odometry terms
         require(self.sigmaR > 0 or self.use_observation_covariance,
                 "sigmaR must be positive unless use_observation_covariance is on")
         require(0 < self.gate <= self.new_landmark_gate,
