@@ -185,15 +185,13 @@ def test_record_command_on_the_simulator(tmp_path):
 
 
 def test_the_gymnasium_env_drives_the_emulated_e_puck():
-    import gymnasium as gym
-
-    import mazeslam  # noqa: F401
+    from mazeslam.envs.hardware_env import HardwareMazeEnv
 
     maze = load_maze(PROJECT_ROOT / "configs" / "mazes" / "paper_sheet.txt")
     robot = SimulatedRobot(maze, seed=1, start_pose=np.array([*maze.cell_center(0, 0), 0.0]))
     emulator = EPuckEmulator(robot, seconds_per_command=0.1)
     camera = OmniCamera(RenderedCamera(robot, CALIBRATION, 320), CALIBRATION, EXERCISE_CONVENTION, 180)
-    env = gym.make("mazeslam/Maze-v0", robot=EPuck(emulator.port, scanner=camera), control_period=0.05)
+    env = HardwareMazeEnv(EPuck(emulator.port, scanner=camera), control_period=0.05)
     observation, info = env.reset()
     assert observation["scan"].shape == (180,) and (observation["scan"] > 0).mean() > 0.8
     for _ in range(5):

@@ -14,7 +14,7 @@ import numpy as np
 
 from mazeslam.beams import BeamGeometry
 from mazeslam.config import require
-from mazeslam.geometry import TWO_PI
+from mazeslam.geometry import TWO_PI, transform_points
 
 #: Angle (rad) by which a wall's angular extent is widened when choosing the beams to test.
 ANGLE_MARGIN = 1e-9
@@ -148,10 +148,8 @@ class VirtualLaser:
 
     def true_ranges(self, pose: np.ndarray) -> np.ndarray:
         """Noise-free ranges (N,) from robot ``pose`` (x, y, theta), ``inf`` beyond ``max_range``."""
-        x, y, heading = (float(v) for v in pose)
-        cos_h, sin_h = math.cos(heading), math.sin(heading)
-        mount_x, mount_y = self.mount
-        return self.caster.cast(x + cos_h * mount_x - sin_h * mount_y, y + sin_h * mount_x + cos_h * mount_y, heading)
+        sensor_x, sensor_y = transform_points(pose, self.mount)
+        return self.caster.cast(float(sensor_x), float(sensor_y), float(pose[2]))
 
     def scan(self, pose: np.ndarray, rng: np.random.Generator) -> np.ndarray:
         """Noisy ranges (N,) as the sensor reports them: metres, 0 for no return."""

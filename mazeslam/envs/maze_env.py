@@ -1,30 +1,4 @@
-"""``mazeslam/Maze-v0``: drive the simulated e-puck through a maze and get rewarded for exploring.
-
-Observation (a Dict):
-    ``scan``      Box(0, max_range, (N,)) the virtual laser's ranges in beam order, metres, 0 = no
-                  return (what a course log's scan record holds).
-    ``odometry``  Box((2,)) the step's odometry increment: distance travelled (m), heading change
-                  (rad) - the course log's dX, dTheta.
-Action: Box(-1, 1, (2,)): ``action_type="velocity"`` gives (forward speed, turn rate) as fractions of
-the robot's top speed and top turn rate; ``"wheels"`` gives (left, right) wheel speeds as fractions
-of the top wheel speed.
-Reward: ``wall_reward`` per metre of wall surface seen for the first time, plus ``cell_reward`` per
-cell entered for the first time, minus ``collision_penalty`` for each step that touches a wall.
-Episode end: terminated when every cell has been visited; truncated after ``max_steps`` steps.
-Mazes: random R x C mazes drawn at every reset, perfect by default (``loop_fraction=0``: one path
-between any two cells), or a given ``Maze`` / maze file; ``reset(options=...)`` may override
-``maze``, ``rows``, ``cols``, ``loop_fraction``, ``start_cell`` and ``start_heading``.
-
-A real robot (``robot=EPuck(...)``, any ``mazeslam.robot.interface.Robot``) can stand in for the
-simulator: the same observations and actions, each step lasting ``control_period`` of wall time;
-with no ground truth there is no reward (0), no termination and ``info`` holds only the time.
-``info``: the true ``pose`` (x, y, theta), ``coverage`` (share of the wall surface seen),
-``visited`` (share of cells entered), ``collision``, ``time`` (s).
-
-One step lasts ``control_period`` seconds of simulated time (physics at the config's rate), and
-ends with one scan. Every random draw (maze, start, wheel slip, laser noise) comes from
-``self.np_random``, seeded by ``reset(seed=...)``.
-"""
+"""``mazeslam/Maze-v0``: drive the simulated e-puck through a maze and get rewarded for exploring."""
 
 from __future__ import annotations
 
@@ -32,50 +6,66 @@ import math
 
 import gymnasium as gym
 import numpy as np
-from gymnasium import spaces
 from scipy.spatial import cKDTree
 
+from mazeslam.envs.drive_env import DriveEnv
 from mazeslam.envs.maze import Maze, generate_maze, load_maze
 from mazeslam.envs.simulated_robot import SimulatedRobot
 from mazeslam.envs.simulator import SimulationConfig
-from mazeslam.robot.interface import Robot
+from mazeslam.geometry import transform_points
 
 #: Spacing (m) of the points along the walls that count as seen once a beam lands near them.
 WALL_SAMPLE_SPACING = 0.01
 
 
-class MazeEnv(gym.Env):
+class MazeEnv(DriveEnv):
+    """``mazeslam/Maze-v0``: the simulated e-puck explores a maze.
+
+    ## Actions and observations
+    As ``DriveEnv``: (speed, turn rate) or (left, right) wheel speeds in [-1, 1]; the scan and the
+    step's odometry increment. One step lasts ``control_period`` seconds of simulated time (physics
+    at ``config.logger.physics_rate``) and ends with one scan.
+
+    ## Rewards
+    ``wall_reward`` per metre of wall surface seen for the first time (a noise-free beam landing
+    within ``WALL_SAMPLE_SPACING`` of it), plus ``cell_reward`` per cell entered for the first time,
+    minus ``collision_penalty`` for each step that touches a wall.
+
+    ## Starting state
+    A random R x C maze drawn at every reset, perfect by default (``loop_fraction=0``: one path
+    between any two cells), or a given ``Maze`` / maze file; the robot at the centre of a random cell
+    with a random heading. ``reset(options=...)`` may override ``maze``, ``rows``, ``cols``,
+    ``loop_fraction``, ``start_cell`` and ``start_heading``.
+
+    ## Episode end
+    Terminated when every cell has been visited; truncated after ``max_steps`` steps.
+
+    ## Info
+    | key          | meaning                                   |
+    |--------------|-------------------------------------------|
+    | ``pose``     | the true pose (x, y, theta): m, m, rad    |
+    | ``coverage`` | share of the wall surface seen            |
+    | ``visited``  | share of the cells entered                |
+    | ``collision``| whether the step touched a wall           |
+    | ``time``     | simulated seconds into the episode        |
+
+    Every random draw (maze, start, wheel slip, laser noise) comes from ``self.np_random``, seeded
+    by ``reset(seed=...)``.
+    """
+
     metadata = {"render_modes": ["human", "rgb_array"], "render_fps": 10}
 
     def __init__(self, render_mode: str | None = None, config: SimulationConfig | None = None, rows: int = 4,
                  cols: int = 4, maze: Maze | str | None = None, loop_fraction: float = 0.0, max_steps: int = 3000,
-                 control_period: float = 0.1,
-                 action_type: str = "velocity", wall_reward: float = 10.0, cell_reward: float = 1.0,
-                 collision_penalty: float = 0.5, robot: Robot | None = None):
+                 control_period: float = 0.1, action_type: str = "velocity", wall_reward: float = 10.0,
+                 cell_reward: float = 1.0, collision_penalty: float = 0.5):
         if render_mode is not None and render_mode not in self.metadata["render_modes"]:
             raise ValueError(f"render_mode must be one of {self.metadata['render_modes']} or None, got {render_mode!r}")
-        if action_type not in ("velocity", "wheels"):
-            raise ValueError(f"action_type must be 'velocity' or 'wheels', got {action_type!r}")
-        if max_steps < 1 or control_period <= 0:
-            raise ValueError("max_steps must be >= 1 and control_period positive")
+        super().__init__(config, max_steps, control_period, action_type)
         self.render_mode = render_mode
-        self.hardware = robot
-        self.config = config or SimulationConfig()
         self.rows, self.cols, self.maze_option, self.loop_fraction = rows, cols, maze, loop_fraction
-        self.max_steps = max_steps
-        self.control_period = control_period
-        self.action_type = action_type
         self.wall_reward, self.cell_reward, self.collision_penalty = wall_reward, cell_reward, collision_penalty
-        robot, laser = self.config.robot, self.config.laser
         self.physics_steps = max(1, round(control_period * self.config.logger.physics_rate))
-        self.top_turn_rate = 2 * robot.max_wheel_speed / robot.wheelbase  # rad/s, wheels opposite at top speed
-        reach = 2.0 * robot.max_wheel_speed * control_period  # odometry bound, with room for slip
-        self.observation_space = spaces.Dict({
-            "scan": spaces.Box(0.0, laser.max_range, shape=(laser.beams,), dtype=np.float32),
-            "odometry": spaces.Box(np.array([-reach, -reach * 2 / robot.wheelbase], dtype=np.float32),
-                                   np.array([reach, reach * 2 / robot.wheelbase], dtype=np.float32)),
-        })
-        self.action_space = spaces.Box(-1.0, 1.0, shape=(2,), dtype=np.float32)
         self.maze = None
         self._figure = None
 
@@ -84,10 +74,6 @@ class MazeEnv(gym.Env):
         super().reset(seed=seed)
         options = options or {}
         self.steps, self.time = 0, 0.0
-        if self.hardware is not None:
-            self.hardware.read_odometry()  # forget the motion before the episode
-            self.last_scan = np.asarray(self.hardware.read_scan(), dtype=np.float32)
-            return {"scan": self.last_scan, "odometry": np.zeros(2, dtype=np.float32)}, {"time": 0.0}
         self.maze = self._choose_maze(options)
         start_cell = tuple(options.get("start_cell", (int(self.np_random.integers(self.maze.rows)),
                                                       int(self.np_random.integers(self.maze.cols)))))
@@ -101,8 +87,7 @@ class MazeEnv(gym.Env):
         self.visited = np.zeros((self.maze.rows, self.maze.cols), dtype=bool)
         self.visited[self.maze.cell_of(*self.start_pose[:2])] = True
         self._see()
-        observation = {"scan": self.last_scan, "odometry": np.zeros(2, dtype=np.float32)}
-        return observation, self._info(collision=False)
+        return self._observation(), self._info(collision=False)
 
     def _choose_maze(self, options: dict) -> Maze:
         choice = options.get("maze", self.maze_option)
@@ -116,64 +101,34 @@ class MazeEnv(gym.Env):
                              options.get("loop_fraction", self.loop_fraction))
 
     def step(self, action):
-        if self.maze is None and self.hardware is None:
-            raise RuntimeError("call reset() before step()")
-        left, right = self._wheel_speeds(np.clip(np.asarray(action, dtype=float), -1.0, 1.0))
-        self.steps += 1
-        if self.hardware is not None:
-            return self._hardware_step(left, right)
-        self.simulated.set_wheel_speeds(left, right)
+        self.simulated.set_wheel_speeds(*self._command(action))
         collision = self.simulated.advance(self.physics_steps / self.config.logger.physics_rate)
         self.time = self.simulated.time
         distance, turn = self.simulated.read_odometry()
-        pose = self.simulated.pose
-        new_cell = not self.visited[self.maze.cell_of(*pose[:2])]
-        self.visited[self.maze.cell_of(*pose[:2])] = True
+        cell = self.maze.cell_of(*self.simulated.pose[:2])
+        new_cell = not self.visited[cell]
+        self.visited[cell] = True
         newly_seen = self._see()
         reward = (self.wall_reward * newly_seen * WALL_SAMPLE_SPACING + self.cell_reward * new_cell
                   - self.collision_penalty * collision)
         terminated = bool(self.visited.all())
         truncated = self.steps >= self.max_steps
-        observation = {"scan": self.last_scan, "odometry": np.array([distance, turn], dtype=np.float32)}
         if self.render_mode == "human":
             self.render()
-        return observation, float(reward), terminated, truncated, self._info(collision)
-
-    def _hardware_step(self, left: float, right: float):
-        """One step on a real robot: command, let ``control_period`` of wall time pass, observe."""
-        import time
-
-        self.hardware.set_wheel_speeds(left, right)
-        time.sleep(self.control_period)
-        self.time += self.control_period
-        distance, turn = self.hardware.read_odometry()
-        self.last_scan = np.asarray(self.hardware.read_scan(), dtype=np.float32)
-        observation = {"scan": self.last_scan, "odometry": np.array([distance, turn], dtype=np.float32)}
-        return observation, 0.0, False, self.steps >= self.max_steps, {"time": self.time}
+        return self._observation(distance, turn), float(reward), terminated, truncated, self._info(collision)
 
     @property
     def world(self):
         """The simulated robot's pymunk world (its ``pose`` is the truth)."""
         return self.simulated.world
 
-    def _wheel_speeds(self, action: np.ndarray) -> tuple[float, float]:
-        robot = self.config.robot
-        if self.action_type == "wheels":
-            return float(action[0]) * robot.max_wheel_speed, float(action[1]) * robot.max_wheel_speed
-        return robot.wheel_speeds(float(action[0]) * robot.max_wheel_speed, float(action[1]) * self.top_turn_rate)
-
     def _see(self) -> int:
         """Scan (into ``last_scan``) and mark the wall samples its noise-free beams land on; return
         how many are new."""
-        pose = self.simulated.pose
-        ranges = self.simulated.true_ranges()
+        ranges = self.simulated.true_ranges()  # inf where no wall lies within the laser's range
         self.last_scan = self.simulated.read_scan(ranges).astype(np.float32)
-        hit = np.isfinite(ranges)
-        geometry = self.config.laser
-        c, s = math.cos(pose[2]), math.sin(pose[2])
-        sensor = pose[:2] + (c * geometry.mount_x - s * geometry.mount_y, s * geometry.mount_x + c * geometry.mount_y)
-        angles = pose[2] + self.laser.bearings[hit]
-        points = sensor + ranges[hit, None] * np.column_stack([np.cos(angles), np.sin(angles)])
+        laser = self.config.laser
+        points = transform_points(self.simulated.pose, laser.geometry.returns(ranges, max_range=laser.max_range))
         _, nearest = self._sample_tree.query(points, distance_upper_bound=WALL_SAMPLE_SPACING)
         nearest = nearest[nearest < len(self._samples)]
         before = int(self.seen.sum())
@@ -181,8 +136,8 @@ class MazeEnv(gym.Env):
         return int(self.seen.sum()) - before
 
     def _info(self, collision: bool) -> dict:
-        return {"pose": self.world.pose, "coverage": float(self.seen.mean()), "visited": float(self.visited.mean()),
-                "collision": bool(collision), "time": self.time}
+        return {"pose": self.simulated.pose, "coverage": float(self.seen.mean()),
+                "visited": float(self.visited.mean()), "collision": bool(collision), "time": self.time}
 
     # -- rendering ----------------------------------------------------------------------------
     def render(self):

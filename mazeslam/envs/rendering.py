@@ -9,10 +9,13 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 from matplotlib.patches import Circle, Rectangle  # noqa: E402
 
+from mazeslam.geometry import transform_points  # noqa: E402
+
 
 def draw_maze_env(env, slam: dict | None = None, size_pixels: int = 480) -> np.ndarray:
-    """An RGB image (H, W, 3) of ``env``: visited cells shaded, walls (seen ones dark), the robot,
-    its laser rays; with ``slam`` (``{"particles": (P, 3), "landmarks": (L, 2)}``) the filter too."""
+    """An RGB image (H, W, 3) of ``env`` (a ``MazeEnv``): visited cells shaded, walls (seen ones
+    dark), the robot, its laser rays (from the sensor to each return); with ``slam``
+    (``{"particles": (P, 3), "landmarks": (L, 2)}``) the filter too."""
     fig = plt.figure(figsize=(size_pixels / 100, size_pixels / 100), dpi=100)
     ax = fig.add_axes((0, 0, 1, 1))
     maze, s = env.maze, env.maze.cell_size
@@ -23,12 +26,11 @@ def draw_maze_env(env, slam: dict | None = None, size_pixels: int = 480) -> np.n
     seen = env._samples[env.seen]
     ax.plot(seen[:, 0], seen[:, 1], ".", color="0.15", markersize=2, zorder=2)
     pose = env.world.pose
-    ranges = env.last_scan.astype(float)
-    valid = ranges > 0
-    angles = pose[2] + env.laser.bearings[valid]
-    ends = pose[:2] + ranges[valid, None] * np.column_stack([np.cos(angles), np.sin(angles)])
+    geometry = env.config.laser.geometry
+    sensor = transform_points(pose, (geometry.mount_x, geometry.mount_y))
+    ends = transform_points(pose, geometry.returns(env.last_scan))
     for end in ends[:: max(1, len(ends) // 60)]:
-        ax.plot([pose[0], end[0]], [pose[1], end[1]], color="tab:red", linewidth=0.4, alpha=0.5, zorder=3)
+        ax.plot([sensor[0], end[0]], [sensor[1], end[1]], color="tab:red", linewidth=0.4, alpha=0.5, zorder=3)
     if slam is not None:
         particles = slam.get("particles")
         if particles is not None:
@@ -38,8 +40,8 @@ def draw_maze_env(env, slam: dict | None = None, size_pixels: int = 480) -> np.n
             ax.plot(landmarks[:, 0], landmarks[:, 1], "+", color="tab:purple", markersize=8, zorder=4)
     radius = env.config.robot.body_radius
     ax.add_patch(Circle(pose[:2], radius, color="tab:blue", zorder=5))
-    ax.plot([pose[0], pose[0] + radius * np.cos(pose[2])], [pose[1], pose[1] + radius * np.sin(pose[2])],
-            color="white", linewidth=2, zorder=6)
+    nose = transform_points(pose, (radius, 0.0))
+    ax.plot([pose[0], nose[0]], [pose[1], nose[1]], color="white", linewidth=2, zorder=6)
     margin = 0.02
     ax.set_xlim(-margin, maze.cols * s + margin)
     ax.set_ylim(-margin, maze.rows * s + margin)

@@ -16,6 +16,7 @@ import numpy as np
 
 from mazeslam.envs.laser import RayCaster
 from mazeslam.envs.simulated_robot import SimulatedRobot
+from mazeslam.geometry import transform_points
 from mazeslam.robot.omnicam import CameraCalibration, render_view
 
 
@@ -95,9 +96,7 @@ class RenderedCamera:
 
     def read(self):
         self.frames += 1
-        x, y, heading = self.robot.pose
-        mount = self.robot.config.laser
-        sensor_x = x + np.cos(heading) * mount.mount_x - np.sin(heading) * mount.mount_y
-        sensor_y = y + np.sin(heading) * mount.mount_x + np.cos(heading) * mount.mount_y
-        ranges = self.caster.cast(sensor_x, sensor_y, heading)
+        pose = self.robot.pose
+        sensor_x, sensor_y = transform_points(pose, self.robot.laser.mount)
+        ranges = self.caster.cast(float(sensor_x), float(sensor_y), float(pose[2]))
         return True, render_view(ranges, self.angles, self.calibration, self.size)
