@@ -5,7 +5,8 @@ At each cell centre it looks along the four grid directions: a beam that reaches
 the cell's edge means an opening. Known openings form a graph of cells; the frontier is the
 openings' far cells not yet visited; the agent drives (breadth-first shortest path over known
 openings) to the nearest one. It localises by the true pose in ``info`` (swap in
-``info["slam"]["pose"]`` from the OnlineFastSLAM wrapper for an agent that only trusts itself).
+``info["slam"]["pose"]`` from ``mazeslam.online_slam.OnlineFastSLAM`` for an agent that only
+trusts itself).
 With ``--record`` the episode is written as a course log with truth and map sidecars:
 
     python examples/frontier_agent.py --record runs/frontier.log

@@ -10,9 +10,10 @@ from gymnasium.utils.env_checker import check_env
 import mazeslam  # noqa: F401  (registers the environments)
 from conftest import PROJECT_ROOT
 from mazeslam import log, sidecars
-from mazeslam.envs.wrappers import OnlineFastSLAM, RecordCourseLog
+from mazeslam.envs.wrappers import RecordCourseLog
 from mazeslam.evaluation.metrics import absolute_trajectory_error
 from mazeslam.filters.motion import dead_reckoning
+from mazeslam.online_slam import OnlineFastSLAM
 from mazeslam.slam import slam_on_file
 from test_simulator import assert_scans_match_truth_and_map
 
