@@ -26,6 +26,7 @@ import numpy as np
 import scipy.sparse
 import scipy.sparse.linalg
 
+from mazeslam.filters import ekf
 from mazeslam.filters.corners import CornerExtractor
 from mazeslam.filters.fastslam import FastSLAMParams
 from mazeslam.filters.motion import dead_reckoning
@@ -88,7 +89,8 @@ def compose_odometry(increments: np.ndarray, sigma_x: float, sigma_th: float,
 
 def range_bearing_residual(poses: np.ndarray, landmarks: np.ndarray,
                            observations: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Residual ``h(pose, landmark) - z`` of range-bearing observations, and its Jacobians.
+    """Residual ``h(pose, landmark) - z`` of range-bearing observations, and its Jacobians
+    (``ekf.range_bearing``'s).
 
     Args:
         poses: (n, 3) x, y (m), theta (rad), world frame.
@@ -99,16 +101,8 @@ def range_bearing_residual(poses: np.ndarray, landmarks: np.ndarray,
         j_pose (n, 2, 3): d residual / d pose;
         j_landmark (n, 2, 2): d residual / d landmark.
     """
-    delta = landmarks - poses[:, :2]
-    dx, dy = delta[:, 0], delta[:, 1]
-    q = np.maximum(dx * dx + dy * dy, 1e-12)
-    rho = np.sqrt(q)
-    residual = np.column_stack([rho - observations[:, 0],
-                                wrap_angle(np.arctan2(dy, dx) - poses[:, 2] - observations[:, 1])])
-    j_landmark = np.stack([np.stack([dx / rho, dy / rho], -1), np.stack([-dy / q, dx / q], -1)], -2)
-    j_pose = np.concatenate([-j_landmark, np.zeros((len(dx), 2, 1))], -1)
-    j_pose[:, 1, 2] = -1.0
-    return residual, j_pose, j_landmark
+    predicted, j_landmark, j_pose = ekf.range_bearing(poses, landmarks)
+    return -ekf.innovation(observations, predicted), j_pose, j_landmark
 
 
 def odometry_residual(from_poses: np.ndarray, to_poses: np.ndarray,
