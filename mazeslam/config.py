@@ -15,6 +15,8 @@ import typing
 from pathlib import Path
 from typing import Any, TypeVar
 
+import numpy as np
+
 T = TypeVar("T")
 
 
@@ -94,11 +96,19 @@ def to_mapping(params) -> dict[str, Any]:
     return dataclasses.asdict(params)
 
 
-def jsonable(mapping: dict) -> dict:
-    """A parameter mapping ready for strict JSON: infinite limits (no limit) become null."""
-    return {key: jsonable(value) if isinstance(value, dict)
-            else None if isinstance(value, float) and not math.isfinite(value) else value
-            for key, value in mapping.items()}
+def jsonable(value):
+    """``value`` ready for strict JSON (``json.dumps(..., allow_nan=False)``): dicts, lists and
+    tuples recursed, numpy arrays and scalars as Python values, and non-finite numbers (an infinite
+    limit: no limit; an undefined statistic) as null."""
+    if isinstance(value, dict):
+        return {key: jsonable(item) for key, item in value.items()}
+    if isinstance(value, (list, tuple, np.ndarray)):
+        return [jsonable(item) for item in value]
+    if isinstance(value, np.generic):
+        value = value.item()
+    if isinstance(value, float) and not math.isfinite(value):
+        return None
+    return value
 
 
 def require(condition: bool, message: str) -> None:

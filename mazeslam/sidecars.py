@@ -66,6 +66,33 @@ def read_truth(path: str | Path) -> tuple[np.ndarray, np.ndarray]:
     return table[:, 0], table[:, 1:]
 
 
+#: Header of a filter's trajectory: the pose and its covariance's upper triangle (m^2, m rad, rad^2).
+TRAJECTORY_HEADER = "t,x,y,theta,cov_xx,cov_xy,cov_xtheta,cov_yy,cov_ytheta,cov_thetatheta"
+_UPPER = np.triu_indices(3)
+
+
+def write_trajectory(path: str | Path, times: np.ndarray, poses: np.ndarray, covariances: np.ndarray) -> None:
+    """Write an estimated trajectory: ``times`` (R,) s, ``poses`` (R, 3) and their covariances
+    (R, 3, 3), one row per record under ``TRAJECTORY_HEADER``."""
+    upper = np.asarray(covariances, dtype=float)[:, _UPPER[0], _UPPER[1]]
+    table = np.column_stack([np.asarray(times, dtype=float), np.asarray(poses, dtype=float), upper])
+    np.savetxt(path, table, fmt=["%.6f"] * 4 + ["%.9g"] * 6, delimiter=",", header=TRAJECTORY_HEADER, comments="")
+
+
+def read_trajectory(path: str | Path) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Read a trajectory written by ``write_trajectory``: times (R,), poses (R, 3), covariances (R, 3, 3)."""
+    path = Path(path)
+    with path.open() as handle:
+        header = handle.readline().strip()
+    if header.replace(" ", "") != TRAJECTORY_HEADER:
+        raise ValueError(f"{path}:1: expected the header {TRAJECTORY_HEADER!r}, got {header!r}")
+    table = np.loadtxt(path, delimiter=",", skiprows=1, ndmin=2)
+    covariances = np.zeros((len(table), 3, 3))
+    covariances[:, _UPPER[0], _UPPER[1]] = table[:, 4:]
+    covariances[:, _UPPER[1], _UPPER[0]] = table[:, 4:]
+    return table[:, 0], table[:, 1:4], covariances
+
+
 def write_tum(path: str | Path, times: np.ndarray, poses: np.ndarray) -> None:
     """Write poses (R, 3) as a TUM trajectory: ``t x y z qx qy qz qw`` per line, z = 0, the heading
     as a rotation about z (for evo and other trajectory tools)."""

@@ -61,6 +61,16 @@ class SlamResult:
     pose_covariances: np.ndarray | None = None
     laser_odometry: LaserOdometry | None = None
 
+    @property
+    def nis(self) -> np.ndarray:
+        """(A,) the normalised innovation squared of every associated observation of the run."""
+        return np.concatenate([report.nis for report in self.reports]) if self.reports else np.empty(0)
+
+    @property
+    def resampled_fraction(self) -> float:
+        """Share of the observation updates after which the filter resampled (0 without any)."""
+        return self.resamplings / len(self.reports) if self.reports else 0.0
+
 
 def run_fastslam(course_log: log.CourseLog, params: FastSLAMParams | None = None,
                  corner_params: CornerParams | None = None, geometry: BeamGeometry = EXERCISE_CONVENTION,

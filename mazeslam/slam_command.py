@@ -9,7 +9,8 @@ from pathlib import Path
 from mazeslam import sidecars
 from mazeslam.beam_detection import convention_warning
 from mazeslam.beams import SensorOverrides
-from mazeslam.config import jsonable, with_changes
+from mazeslam.config import with_changes
+from mazeslam.evaluation.consistency import EXPLANATION, OBSERVATION_BOUND_95, POSE_BOUND_95, nis_summary
 from mazeslam.evaluation import slam_report
 from mazeslam.evaluation.scoring import RPE_DISTANCE, score_run
 from mazeslam.loaded_run import LoadedRun, load_run
@@ -35,13 +36,17 @@ def run_slam_command(log_file, config_path, out_dir, filter_changes: dict | None
     matching_seconds = time.perf_counter() - began - result.step_seconds.sum()
     lines = _run_lines(run, config, result, matching_seconds)
     score = score_run(run, result, config.evaluation.match_radius)
+    nis = nis_summary(result.nis)
     extra = {"source": str(log_file), "beam_geometry": run.geometry.to_dict(), "start_pose": run.start_pose.tolist(),
-             "parameters": jsonable(dataclasses.asdict(config)), "consistency": slam_report.consistency(result),
+             "parameters": dataclasses.asdict(config), "consistency": slam_report.consistency(result),
+             "nis": nis, "resampled_fraction": result.resampled_fraction,
              "dropped_odometry_lines": [int(run.log.line_numbers[r.index]) for r in result.dropped_odometry]}
+    lines += _uncertainty_lines(nis, score.nees_summary if score is not None else None)
     if score is not None:
         lines += _score_lines(run, result, score, config.evaluation.match_radius)
         extra["ate"] = score.table.reset_index().to_dict(orient="records")
         extra["map_error"] = score.map_errors
+        extra["nees"] = score.nees_summary
     else:
         lines.append("no ground truth beside the log: no errors to report")
     paths = slam_report.write_outputs(out_dir, result, extra)
@@ -93,11 +98,25 @@ def _run_lines(run: LoadedRun, config: SlamConfig, result: SlamResult, matching_
     return lines
 
 
+def _uncertainty_lines(nis: dict, nees: dict | None) -> list[str]:
+    """Is the stated uncertainty right: NIS always, NEES with truth, and what they mean."""
+    def described(summary: dict, bound: float, consistent: int) -> str:
+        if not summary["count"]:
+            return "undefined"
+        return (f"mean {summary['mean']:.2f}, median {summary['median']:.2f}, {100 * summary['inside_95']:.0f} % "
+                f"inside the 95 % bound {bound:.2f} (consistent: {consistent})")
+
+    line = f"Uncertainty: NIS of {nis['count']} associated observations {described(nis, OBSERVATION_BOUND_95, 2)}"
+    if nees is not None:
+        line += f"; pose NEES {described(nees, POSE_BOUND_95, 3)}"
+    return [line, "  " + EXPLANATION]
+
+
 def _score_lines(run: LoadedRun, result: SlamResult, score, match_radius: float) -> list[str]:
     """The error table against the truth and the map's errors."""
     scored = "at the scans (laser odometry: no pose between scans)" if result.laser_odometry is not None else "at every record"
     lines = [f"Errors against {run.truth_label}, {scored}: ATE [m] (aligned: after the best rigid motion), RPE over "
-             f"{RPE_DISTANCE} m of path [m, rad], NEES of the pose (consistent: 3):",
+             f"{RPE_DISTANCE} m of path [m, rad], NEES of the mean pose (consistent: 3):",
              score.table.to_markdown(floatfmt=".4f")]
     if not len(run.true_corners):
         return lines + ["Map: no true corners beside the log, the map is not scored"]

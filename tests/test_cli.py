@@ -61,7 +61,7 @@ def test_demo_simulates_maps_prints_ate_table_and_writes_plot(tmp_path):
     assert "| dead reckoning " in result.output and "| FastSLAM (mean) " in result.output
     assert (tmp_path / "demo" / "slam" / "slam.png").stat().st_size > 10_000
     trajectory = (tmp_path / "demo" / "slam" / "trajectory.csv").read_text().splitlines()
-    assert trajectory[0] == "t,x,y,theta"
+    assert trajectory[0] == "t,x,y,theta,cov_xx,cov_xy,cov_xtheta,cov_yy,cov_ytheta,cov_thetatheta"
     assert len(trajectory) - 1 == len(log.read(tmp_path / "demo" / "run.log"))
 
 

@@ -14,6 +14,7 @@ from dataclasses import dataclass
 import numpy as np
 import pandas as pd
 
+from mazeslam.evaluation.consistency import nees_summary
 from mazeslam.evaluation.metrics import (
     absolute_trajectory_error, align_se2, apply_se2, map_error, normalized_estimation_error, relative_pose_error,
 )
@@ -39,7 +40,8 @@ class RunScore:
             and best particle): ATE (RMSE, mean, max; as estimated and ``aligned_*``, metres), RPE
             over ``RPE_DISTANCE`` (translation m, rotation rad), ``mean_nees`` and
             ``median_nees`` for the filter's mean.
-        nees: (S,) the mean pose's NEES at each scored record (NaN where undefined).
+        nees: (S,) the mean pose's NEES at each scored record (NaN where undefined);
+            nees_summary its mean, median and share inside the 95 % bound (``consistency``).
         alignment: (3,) the rigid motion (x, y, theta) that best maps the mean path onto the truth.
         map_errors: ``{"as estimated": ..., "aligned": ...}`` each ``metrics.map_error``'s dict,
             against the true corners (empty when the log has none).
@@ -48,6 +50,7 @@ class RunScore:
     records: np.ndarray
     table: pd.DataFrame
     nees: np.ndarray
+    nees_summary: dict
     alignment: np.ndarray
     map_errors: dict
 
@@ -85,16 +88,12 @@ def score_run(run: LoadedRun, result: SlamResult, match_radius: float = 0.05) ->
     table = error_table(estimates, truth)
     nees = normalized_estimation_error(mean, result.pose_covariances[records], truth)
     table["mean_nees"] = table["median_nees"] = np.nan
-    table.loc[FILTER_MEAN, ["mean_nees", "median_nees"]] = [_nan_statistic(np.nanmean, nees),
-                                                             _nan_statistic(np.nanmedian, nees)]
+    summary = nees_summary(nees)
+    table.loc[FILTER_MEAN, ["mean_nees", "median_nees"]] = [np.nan if summary[key] is None else summary[key]
+                                                             for key in ("mean", "median")]
     alignment = align_se2(mean, truth)
     aligned = apply_se2(alignment, result.landmarks) if len(result.landmarks) else result.landmarks
     map_errors = {"as estimated": map_error(result.landmarks, run.true_corners, match_radius),
                   "aligned": map_error(aligned, run.true_corners, match_radius)}
-    return RunScore(records, table, nees, alignment, map_errors)
+    return RunScore(records, table, nees, summary, alignment, map_errors)
 
-
-def _nan_statistic(statistic, values: np.ndarray) -> float:
-    """``statistic`` over the finite values, NaN when there are none (without numpy's warning)."""
-    finite = values[np.isfinite(values)]
-    return float(statistic(finite)) if len(finite) else float("nan")

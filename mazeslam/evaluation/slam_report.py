@@ -15,6 +15,7 @@ from matplotlib.patches import Ellipse  # noqa: E402
 
 from mazeslam import log, sidecars  # noqa: E402
 from mazeslam.beams import BeamGeometry  # noqa: E402
+from mazeslam.config import jsonable  # noqa: E402
 from mazeslam.evaluation.plots import save_figure  # noqa: E402
 from mazeslam.geometry import transform_points  # noqa: E402
 from mazeslam.slam import SlamResult  # noqa: E402
@@ -118,14 +119,15 @@ def animate_slam(path, result: SlamResult, points: np.ndarray, truth: np.ndarray
 
 
 def write_outputs(out_dir, result: SlamResult, extra: dict) -> dict[str, Path]:
-    """``trajectory.csv`` (t,x,y,theta: weighted mean at every record), the same as
-    ``trajectory.tum`` (for evo), ``best_trajectory.csv`` (most probable particle) and ``map.json``
-    (best particle's landmarks with covariances, run facts)."""
+    """``trajectory.csv`` (t,x,y,theta: weighted mean at every record, and the particle cloud's
+    covariance cov_xx ... cov_thetatheta), the same as ``trajectory.tum`` (for evo),
+    ``best_trajectory.csv`` (most probable particle) and ``map.json`` (best particle's landmarks
+    with covariances, run facts; strict JSON)."""
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
     paths = {"trajectory": out_dir / "trajectory.csv", "best_trajectory": out_dir / "best_trajectory.csv",
              "map": out_dir / "map.json", "tum": out_dir / "trajectory.tum"}
-    sidecars.write_truth(paths["trajectory"], result.times, result.mean_poses)
+    sidecars.write_trajectory(paths["trajectory"], result.times, result.mean_poses, result.pose_covariances)
     sidecars.write_tum(paths["tum"], result.times, result.mean_poses)
     sidecars.write_truth(paths["best_trajectory"], result.times, result.best_poses)
     scan_seconds = np.array([s for s in result.step_seconds])
@@ -139,5 +141,5 @@ def write_outputs(out_dir, result: SlamResult, extra: dict) -> dict[str, Path]:
         "seconds_per_record_mean": float(scan_seconds.mean()),
         **extra,
     }
-    paths["map"].write_text(json.dumps(document, indent=1) + "\n")
+    paths["map"].write_text(json.dumps(jsonable(document), indent=1, allow_nan=False) + "\n")
     return paths

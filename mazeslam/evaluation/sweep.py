@@ -44,8 +44,9 @@ import numpy as np
 import pandas as pd
 from tqdm.auto import tqdm
 
-from mazeslam.config import ConfigError
+from mazeslam.config import ConfigError, jsonable
 from mazeslam.envs.simulator import SimulationConfig, load_config, simulate
+from mazeslam.evaluation.consistency import nis_summary
 from mazeslam.evaluation.metrics import apply_se2
 from mazeslam.evaluation.scoring import DEAD_RECKONING, FILTER_MEAN, score_run
 from mazeslam.loaded_run import load_run
@@ -202,7 +203,10 @@ def execute_run(sweep: Sweep, run: dict, maps_folder: str | None = None) -> dict
         "ess_median": float(np.median([r.effective_sample_size for r in reports])) if reports else np.nan,
         "new_per_scan": float(np.mean([r.new for r in reports])) / particles if reports else np.nan,
         "ambiguous_per_scan": float(np.mean([r.ambiguous for r in reports])) / particles if reports else np.nan,
-        "median_nees": filter_row["median_nees"],
+        "median_nees": filter_row["median_nees"], "mean_nees": filter_row["mean_nees"],
+        "nees_inside_95": score.nees_summary["inside_95"],
+        **{f"nis_{key}": value for key, value in nis_summary(result.nis).items() if key in ("mean", "inside_95")},
+        "resampled_fraction": result.resampled_fraction,
         "resamplings": result.resamplings, "scans": len(reports),
         "slam_seconds": seconds, "log_seconds": loaded.log.duration,
         "seconds_per_record": seconds / len(loaded.log),
@@ -260,7 +264,7 @@ def run_sweep(sweep: Sweep, out_dir: str | Path, workers: int | None = None, sch
                disable=not progress)
     with (out_dir / RESULTS).open("a") as results:
         for row in _execute(sweep, pending, str(out_dir / MAPS), workers, scheduler):
-            results.write(json.dumps(row) + "\n")
+            results.write(json.dumps(jsonable(row), allow_nan=False) + "\n")
             results.flush()
             done[row["run_id"]] = row
             bar.update(1)

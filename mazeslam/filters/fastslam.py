@@ -29,7 +29,7 @@ from __future__ import annotations
 
 import enum
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -138,6 +138,10 @@ class UpdateReport:
     removed: int = 0
     resampled: bool = False
     effective_sample_size: float = 0.0
+    nis: np.ndarray = field(default_factory=lambda: np.empty(0))
+    """(A,) normalised innovation squared of each associated observation (2 degrees of freedom):
+    the squared Mahalanobis distance of its innovation under the predictive covariance the weights
+    use, averaged over the particles that associated it with their weights before the scan."""
 
 
 @dataclass
@@ -271,6 +275,7 @@ class FastSLAM:
                 self.rng)
             model = self._model(observations, noise, m, with_pose_uncertainty=False)
         # 3. Landmarks and weights, observation by observation.
+        report.nis = _normalised_innovations(prior.distance2, assigned, self.weights())
         matched_now = np.zeros_like(self.exists)
         for k in range(count):
             self._apply(k, assigned[:, k], model, prior, observations[k], noise[k], ids, matched_now, report)
@@ -422,3 +427,14 @@ class FastSLAM:
         keep = self.exists[particle]
         return self.means[particle, keep], self.covariances[particle, keep]
 
+
+def _normalised_innovations(distance2: np.ndarray, assigned: np.ndarray, weights: np.ndarray) -> np.ndarray:
+    """NIS (A,) of the observations that some particle associated: for observation k, the
+    weight-averaged squared Mahalanobis distance ``distance2`` (P, K, M) over the particles whose
+    ``assigned`` (P, K) slot is not -1, with their normalised ``weights`` (P,)."""
+    values = []
+    for k in range(assigned.shape[1]):
+        rows = np.flatnonzero(assigned[:, k] >= 0)
+        if len(rows):
+            values.append(np.average(distance2[rows, k, assigned[rows, k]], weights=weights[rows] + 1e-300))
+    return np.asarray(values, dtype=float)

@@ -1,0 +1,45 @@
+"""Is the filter's stated uncertainty right? NEES against truth and NIS on every log.
+
+A consistent estimator's errors are as large as it says: the pose NEES ``e^T P^-1 e`` (3 degrees of
+freedom) averages 3 and stays below the chi-square 95 % point 7.81 on 95 % of records, and the
+normalised innovation squared of an associated observation (2 degrees of freedom, needs no truth)
+averages 2 and stays below 5.99 on 95 % of observations. Much larger values: the filter is
+overconfident (its covariance too small); much smaller: underconfident.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy.stats import chi2
+
+#: The chi-square 95 % points: the pose (3 dimensions) and an observation (range and bearing).
+POSE_BOUND_95 = float(chi2.ppf(0.95, 3))
+OBSERVATION_BOUND_95 = float(chi2.ppf(0.95, 2))
+
+#: One line for users: what the two numbers mean.
+EXPLANATION = ("NEES (pose error against truth, weighted by the filter's own covariance) and NIS (each "
+               "observation's surprise under the filter's prediction) measure whether the filter's stated "
+               "uncertainty is right: a consistent filter averages NEES 3 and NIS 2, and about 95 % of values "
+               f"fall inside the 95 % bounds ({POSE_BOUND_95:.2f} and {OBSERVATION_BOUND_95:.2f}); far larger "
+               "means overconfident.")
+
+
+def summarise(values: np.ndarray, bound: float) -> dict[str, float | int | None]:
+    """Mean, median, the fraction of values at or below ``bound`` and the count, over the finite
+    values (None where there are none: strict JSON)."""
+    finite = np.asarray(values, dtype=float)
+    finite = finite[np.isfinite(finite)]
+    if not len(finite):
+        return {"mean": None, "median": None, "inside_95": None, "count": 0}
+    return {"mean": float(finite.mean()), "median": float(np.median(finite)),
+            "inside_95": float(np.mean(finite <= bound)), "count": int(len(finite))}
+
+
+def nees_summary(nees: np.ndarray) -> dict:
+    """``summarise`` of per-record pose NEES (3 degrees of freedom)."""
+    return summarise(nees, POSE_BOUND_95)
+
+
+def nis_summary(nis: np.ndarray) -> dict:
+    """``summarise`` of per-observation NIS (2 degrees of freedom)."""
+    return summarise(nis, OBSERVATION_BOUND_95)

@@ -1,0 +1,85 @@
+"""The uncertainty a run states, and the statistics that judge it, against hand-computed cases."""
+
+import json
+import math
+
+import numpy as np
+import pytest
+
+from mazeslam import sidecars
+from mazeslam.evaluation.consistency import OBSERVATION_BOUND_95, POSE_BOUND_95, nees_summary, nis_summary
+from mazeslam.evaluation.metrics import normalized_estimation_error
+from mazeslam.filters.fastslam import FastSLAM, FastSLAMParams
+
+EXACT = FastSLAMParams(NPARTICLES=1, sigmaX=0, sigmaTH=0, sigmaTH_drive=0, sigmaR=0.01, sigmaB=0.02,
+                       use_observation_covariance=False, resample_threshold=0)
+
+
+def test_the_pose_covariance_is_the_weighted_covariance_of_the_cloud():
+    slam = FastSLAM(FastSLAMParams(NPARTICLES=3))
+    slam.poses = np.array([[0.0, 0.0, 0.1], [1.0, 0.0, 0.1], [0.0, 2.0, 0.4]])
+    slam.log_weights = np.log([0.5, 0.25, 0.25])
+    # By hand: mean x = 0.25, y = 0.5; heading mean atan2(sum w sin, sum w cos) near 0.175.
+    mean = slam.mean_pose()
+    assert mean[:2] == pytest.approx([0.25, 0.5])
+    heading = math.atan2(0.75 * math.sin(0.1) + 0.25 * math.sin(0.4), 0.75 * math.cos(0.1) + 0.25 * math.cos(0.4))
+    assert mean[2] == pytest.approx(heading)
+    dx, dy, dt = np.array([-0.25, 0.75, -0.25]), np.array([-0.5, -0.5, 1.5]), np.array([0.1, 0.1, 0.4]) - heading
+    w = np.array([0.5, 0.25, 0.25])
+    expected = np.array([[w @ (a * b) for b in (dx, dy, dt)] for a in (dx, dy, dt)])
+    np.testing.assert_allclose(slam.pose_covariance(), expected, atol=1e-12)
+
+
+def test_the_trajectory_file_round_trips_poses_and_covariances(tmp_path):
+    rng = np.random.default_rng(0)
+    roots = rng.normal(size=(4, 3, 3)) * 0.01
+    covariances = roots @ np.swapaxes(roots, 1, 2)
+    poses = rng.normal(size=(4, 3))
+    sidecars.write_trajectory(tmp_path / "t.csv", np.arange(4) * 0.2, poses, covariances)
+    assert (tmp_path / "t.csv").read_text().splitlines()[0] == (
+        "t,x,y,theta,cov_xx,cov_xy,cov_xtheta,cov_yy,cov_ytheta,cov_thetatheta")
+    times, read_poses, read_covariances = sidecars.read_trajectory(tmp_path / "t.csv")
+    np.testing.assert_allclose(times, np.arange(4) * 0.2)
+    np.testing.assert_allclose(read_poses, poses, atol=1e-6)
+    np.testing.assert_allclose(read_covariances, covariances, rtol=1e-8)
+
+
+def test_nees_by_hand():
+    # Error (0.1 m, 0, 0.2 rad) under a diagonal covariance (0.01, 1, 0.04): 1 + 0 + 1 = 2.
+    nees = normalized_estimation_error(np.array([[1.1, 2.0, 0.2]]), np.diag([0.01, 1.0, 0.04])[None],
+                                       np.array([[1.0, 2.0, 0.0]]))
+    assert nees[0] == pytest.approx(2.0)
+    # The heading error is wrapped: 3.1 vs -3.1 rad is 0.083 rad apart, not 6.2.
+    wrapped = normalized_estimation_error(np.array([[0.0, 0.0, 3.1]]), np.eye(3)[None], np.array([[0.0, 0.0, -3.1]]))
+    assert wrapped[0] == pytest.approx((2 * math.pi - 6.2) ** 2)
+
+
+def test_nis_of_one_observation_by_hand():
+    slam = FastSLAM(EXACT)
+    slam.update(np.array([[1.0, 0.0]]))  # a landmark at (1, 0), covariance G R G^T = diag(1e-4, 4e-4)
+    report = slam.update(np.array([[1.02, 0.01]]))
+    # S = H Sigma H^T + R with H = I at (1, 0) from the origin: diag(2e-4, 8e-4); nu = (0.02, 0.01).
+    assert report.nis == pytest.approx([0.02**2 / 2e-4 + 0.01**2 / 8e-4])
+
+
+def test_summaries_give_mean_median_and_share_inside_the_bound():
+    summary = nees_summary(np.array([1.0, 2.0, 10.0, np.nan]))
+    assert summary == {"mean": pytest.approx(13 / 3), "median": 2.0, "inside_95": pytest.approx(2 / 3), "count": 3}
+    assert POSE_BOUND_95 == pytest.approx(7.815, abs=1e-3) and OBSERVATION_BOUND_95 == pytest.approx(5.991, abs=1e-3)
+    assert nis_summary(np.empty(0)) == {"mean": None, "median": None, "inside_95": None, "count": 0}
+
+
+def test_the_slam_command_writes_strict_json_and_reports_consistency(default_run, tmp_path):
+    from mazeslam.slam_command import run_slam_command
+
+    lines = run_slam_command(default_run.log_path, None, tmp_path / "out", {"NPARTICLES": 20}, progress=False)
+    text = "\n".join(lines)
+    assert "NIS of" in text and "pose NEES" in text
+
+    def refuse(constant):
+        raise ValueError(f"non-strict JSON constant {constant}")
+
+    document = json.loads((tmp_path / "out" / "map.json").read_text(), parse_constant=refuse)
+    assert document["nis"]["count"] > 0 and 0 <= document["nees"]["inside_95"] <= 1
+    _, _, covariances = sidecars.read_trajectory(tmp_path / "out" / "trajectory.csv")
+    assert np.all(np.linalg.eigvalsh(covariances[1:]) >= -1e-12)
