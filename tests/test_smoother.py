@@ -20,7 +20,7 @@ from mazeslam.loaded_run import load_run
 from mazeslam.log import ODOMETRY, SCAN, CourseLog
 from mazeslam.slam import truth_identities
 
-SIGMAS = dict(sigma_x=0.0027, sigma_th=0.017, sigma_th_drive=0.1)  # FastSLAMParams' defaults
+SIGMAS = {"sigma_x": 0.0027, "sigma_th": 0.017, "sigma_th_drive": 0.1}  # FastSLAMParams' defaults
 INCREMENTS = np.array([[0.010, 0.02], [0.012, -0.05], [0.0, 0.3], [0.008, 0.1], [0.011, 0.0], [-0.005, 0.04]])
 
 

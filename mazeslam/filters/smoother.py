@@ -20,6 +20,7 @@ pose is given in the frame of the pose it starts from; observations are in the r
 
 from __future__ import annotations
 
+import itertools
 from dataclasses import dataclass
 
 import numpy as np
@@ -30,7 +31,13 @@ from mazeslam.filters import ekf
 from mazeslam.filters.corners import CornerExtractor
 from mazeslam.filters.fastslam import FastSLAMParams
 from mazeslam.filters.motion import dead_reckoning
-from mazeslam.geometry import compose, polar_to_cartesian, relative, transform_points, wrap_angle
+from mazeslam.geometry import (
+    compose,
+    polar_to_cartesian,
+    relative,
+    transform_points,
+    wrap_angle,
+)
 from mazeslam.log import CourseLog
 
 #: Variance (m^2 and rad^2) added to the diagonal of every odometry factor's covariance. The
@@ -217,7 +224,7 @@ def build_problem(course_log: CourseLog, observations: list[np.ndarray], covaria
     increments = course_log.increments
     bounds = np.concatenate([[0], scan_records + 1])
     composed = [compose_odometry(increments[a:b], params.sigmaX, params.sigmaTH, params.sigmaTH_drive)
-                for a, b in zip(bounds[:-1], bounds[1:])]
+                for a, b in itertools.pairwise(bounds)]
     odometry = np.array([z for z, _ in composed]).reshape(-1, 3)
     odometry_covariances = np.array([c for _, c in composed]).reshape(-1, 3, 3) + MOTION_FLOOR_VARIANCE * np.eye(3)
     # 2. Observation factors: the named observations, with FastSLAM's noise.
