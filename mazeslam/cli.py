@@ -305,9 +305,9 @@ def odometry_noise(log_file, config_path):
     click.echo(f"# {log_file}: {noise.stretches} stretches between observations, {noise.distance:.2f} m driven, "
                f"{noise.turn:.1f} rad turned ({source} against {truth_file})")
     click.echo("[fastslam]")
-    click.echo(f"sigmaX = {noise.sigmaX:.4g}          # m per sqrt(m)")
-    click.echo(f"sigmaTH = {noise.sigmaTH:.4g}         # rad per sqrt(rad) turned")
-    click.echo(f"sigmaTH_drive = {noise.sigmaTH_drive:.4g}   # rad per sqrt(m) driven")
+    click.echo(f"sigmaX = {noise.noise.sigmaX:.4g}          # m per sqrt(m)")
+    click.echo(f"sigmaTH = {noise.noise.sigmaTH:.4g}         # rad per sqrt(rad) turned")
+    click.echo(f"sigmaTH_drive = {noise.noise.sigmaTH_drive:.4g}   # rad per sqrt(m) driven")
 
 
 @main.command()

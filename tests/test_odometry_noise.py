@@ -34,16 +34,16 @@ def test_measured_noise_matches_the_wheel_slip_it_comes_from(tmp_path):
     slip, wheelbase = 0.003, RobotParams().wheelbase
     noise = measured(run_with_slip(tmp_path, slip))
     assert noise.stretches > 500 and noise.distance > 10
-    assert noise.sigmaX == pytest.approx(slip / math.sqrt(2), rel=0.15)
-    assert noise.sigmaTH_drive == pytest.approx(slip * math.sqrt(2) / wheelbase, rel=0.15)
-    assert noise.sigmaTH == pytest.approx(slip / math.sqrt(wheelbase), rel=0.15)
+    assert noise.noise.sigmaX == pytest.approx(slip / math.sqrt(2), rel=0.15)
+    assert noise.noise.sigmaTH_drive == pytest.approx(slip * math.sqrt(2) / wheelbase, rel=0.15)
+    assert noise.noise.sigmaTH == pytest.approx(slip / math.sqrt(wheelbase), rel=0.15)
 
 
 def test_without_slip_only_a_small_floor_remains(tmp_path):
     """Whole encoder steps, the 1e-6 rounding of the log and brushing walls leave a floor at least
     five times below the default slip's noise (0.0021, 0.013, 0.080)."""
     noise = measured(run_with_slip(tmp_path, 0.0))
-    assert noise.sigmaX < 0.0021 / 5 and noise.sigmaTH < 0.013 / 5 and noise.sigmaTH_drive < 0.080 / 5
+    assert noise.noise.sigmaX < 0.0021 / 5 and noise.noise.sigmaTH < 0.013 / 5 and noise.noise.sigmaTH_drive < 0.080 / 5
 
 
 def test_bad_input_is_named(default_run):

@@ -28,28 +28,24 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.optimize import nnls
 
-from mazeslam.filters.motion import dead_reckoning
+from mazeslam.filters.motion import OdometryNoise, dead_reckoning
 from mazeslam.filters.scan_matching import LaserOdometry
 from mazeslam.geometry import relative, wrap_angle
 from mazeslam.log import CourseLog
 
 
 @dataclass(frozen=True)
-class OdometryNoise:
-    """Odometry noise in the filter's units.
+class MeasuredOdometryNoise:
+    """Odometry noise measured on a log, in the filter's units.
 
     Attributes:
-        sigmaX: distance noise, m per sqrt(m) travelled.
-        sigmaTH: heading noise from turning, rad per sqrt(rad) turned.
-        sigmaTH_drive: heading noise from driving, rad per sqrt(m) travelled.
+        noise: the fitted sigmaX, sigmaTH, sigmaTH_drive.
         stretches: how many stretches between observations were used.
         distance: odometry distance they cover, m.
         turn: odometry turning they cover, rad.
     """
 
-    sigmaX: float
-    sigmaTH: float
-    sigmaTH_drive: float
+    noise: OdometryNoise
     stretches: int
     distance: float
     turn: float
@@ -113,12 +109,12 @@ def _error_row(moved: float, turned: float, measured_step: np.ndarray, true_step
     return moved, turned, along, wrap_angle(true_step[2] - measured_step[2])
 
 
-def measure_odometry_noise(course_log: CourseLog, truth: np.ndarray) -> OdometryNoise:
+def measure_odometry_noise(course_log: CourseLog, truth: np.ndarray) -> MeasuredOdometryNoise:
     """Fit the filter's odometry noise parameters to a log with truth (see the module docstring)."""
     return fit_noise(stretch_errors(course_log, truth))
 
 
-def fit_noise(errors: np.ndarray) -> OdometryNoise:
+def fit_noise(errors: np.ndarray) -> MeasuredOdometryNoise:
     """The noise parameters that fit the stretch errors (K, 4) ``[D, T, e_along, e_theta]`` by
     non-negative least squares (see the module docstring)."""
     moved, turned, along, heading = errors.T
@@ -127,5 +123,5 @@ def fit_noise(errors: np.ndarray) -> OdometryNoise:
     motion = np.column_stack([moved, turned])
     (distance_var, _), _ = nnls(motion, along**2)  # turning on the spot also shifts the axle a little
     (drive_var, turn_var), _ = nnls(motion, heading**2)
-    return OdometryNoise(math.sqrt(distance_var), math.sqrt(turn_var), math.sqrt(drive_var), len(errors),
-                         float(moved.sum()), float(turned.sum()))
+    noise = OdometryNoise(math.sqrt(distance_var), math.sqrt(turn_var), math.sqrt(drive_var))
+    return MeasuredOdometryNoise(noise, len(errors), float(moved.sum()), float(turned.sum()))
