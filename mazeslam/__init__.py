@@ -1,16 +1,32 @@
 """mazeslam: particle-filter SLAM (FastSLAM) for a small differential-drive robot in a maze.
 
-The stages (see DESIGN.md): simulate a maze run or record a real one -> a course log (+ truth and
-map sidecars) -> corners -> FastSLAM -> metrics. Start with ``mazeslam.simulate`` and
+The stages (see docs/architecture.md): simulate a maze run or record a real one -> a course log (+
+truth and map sidecars) -> corners -> FastSLAM -> metrics. Start with ``mazeslam.simulate`` and
 ``mazeslam.log.read``.
+
+Importing the package registers the Gymnasium environment ``mazeslam/Maze-v0`` and loads nothing
+heavier than Gymnasium itself (which has no lazy plugin registration since 1.0): the simulator
+(pymunk) loads on first use of ``mazeslam.simulate`` or ``mazeslam.SimulationConfig``, plotting,
+tables and the camera only in the modules that need them.
 """
 
 import gymnasium
 
-from mazeslam.envs.simulator import SimulationConfig, simulate
-
 __all__ = ["SimulationConfig", "simulate"]
+__version__ = "0.1.0"
 
 if "mazeslam/Maze-v0" not in gymnasium.registry:
     gymnasium.register(id="mazeslam/Maze-v0", entry_point="mazeslam.envs.maze_env:MazeEnv")
-__version__ = "0.1.0"
+
+
+def __getattr__(name: str):
+    """``simulate`` and ``SimulationConfig`` from ``mazeslam.envs.simulator``, imported on first use."""
+    if name in __all__:
+        from mazeslam.envs import simulator
+
+        return getattr(simulator, name)
+    raise AttributeError(f"module 'mazeslam' has no attribute {name!r}")
+
+
+def __dir__() -> list[str]:
+    return sorted({*globals(), *__all__})
