@@ -7,6 +7,7 @@ import math
 import sys
 
 from mazeslam.beams import EXERCISE_CONVENTION
+from mazeslam.config import with_changes
 from mazeslam.envs.maze import generate_maze, load_maze
 from mazeslam.envs.policies import load_commands
 from mazeslam.envs.simulated_robot import SimulatedRobot
@@ -18,8 +19,7 @@ def run_record(out, port=None, camera=None, sim=False, maze="random", seed=0, be
                odometry_rate=5.0, center=None, inner_radius=40.0, outer_radius=None, height=0.126, alpha=107.0,
                threshold="180", script=None, duration=None, geometry_overrides=None) -> list[str]:
     """Record one log; returns the lines to print."""
-    overrides = {k: v for k, v in (geometry_overrides or {}).items() if v is not None}
-    geometry = dataclasses.replace(EXERCISE_CONVENTION, **overrides)
+    geometry = with_changes(EXERCISE_CONVENTION, **(geometry_overrides or {}))
     config = SimulationConfig()
     if sim:
         laser = dataclasses.replace(config.laser, beams=beams, first_beam_angle=geometry.first_beam_angle,
