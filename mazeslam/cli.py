@@ -222,6 +222,29 @@ def slam(log_file, particles, config_path, out_dir, seed, association, version, 
 
 
 @main.command()
+@click.argument("log_file", type=click.Path(exists=True, dir_okay=False, path_type=Path))
+@click.option("--config", "config_path", type=click.Path(exists=True, dir_okay=False, path_type=Path),
+              help="The slam TOML whose [fastslam] noise, [corners] and [sensor] to use (see configs/fastslam.toml).")
+@click.option("--association", type=click.Choice(["known", "from-run"]), default="known", show_default=True,
+              help="known: the true corners (truth and map sidecars); from-run: the map of a `mazeslam slam` run.")
+@click.argument("run_dir", required=False, type=click.Path(exists=True, file_okay=False, path_type=Path))
+@click.option("--out", "out_dir", type=click.Path(file_okay=False, path_type=Path),
+              help="Folder for trajectory.csv, map.json, smooth.png [default: beside the log, <name>.smooth/].")
+@beam_geometry_options
+def smooth(log_file, config_path, association, run_dir, out_dir, first_beam_angle, beam_direction, mount_x):
+    """Batch least-squares SLAM over the whole log: the optimum FastSLAM is measured against.
+
+    With --association from-run, RUN_DIR is the output folder of `mazeslam slam` on the same log."""
+    from mazeslam.smooth_command import run_smooth_command
+
+    if (association == "from-run") != (run_dir is not None):
+        raise click.UsageError("RUN_DIR goes with --association from-run, and only with it")
+    out_dir = out_dir or log_file.with_name(f"{log_file.stem}.smooth")
+    overrides = _geometry_overrides(first_beam_angle, beam_direction, mount_x)
+    click.echo("\n".join(run_smooth_command(log_file, config_path, out_dir, association, run_dir, overrides)))
+
+
+@main.command()
 @click.option("--out", "out", type=click.Path(dir_okay=False, path_type=Path), required=True,
               help="Course log to write (its map sidecar records the beam geometry).")
 @click.option("--port", help="The e-puck's serial port, e.g. /dev/ttyUSB0.")

@@ -15,6 +15,7 @@ from mazeslam.evaluation import slam_report
 from mazeslam.evaluation.scoring import RPE_DISTANCE, score_run
 from mazeslam.loaded_run import LoadedRun, load_run
 from mazeslam.slam import SlamConfig, SlamResult, load_slam_config, slam_on_run
+from mazeslam.smooth_command import optimum_columns, optimum_line
 
 #: About how many frames ``--animate`` draws, whatever the log's length.
 ANIMATION_FRAMES = 150
@@ -47,6 +48,10 @@ def run_slam_command(log_file, config_path, out_dir, filter_changes: dict | None
         extra["ate"] = score.table.reset_index().to_dict(orient="records")
         extra["map_error"] = score.map_errors
         extra["nees"] = score.nees_summary
+        optimum = optimum_columns(run, config, score)
+        if optimum is not None:
+            lines.append(optimum_line(optimum))
+            extra["optimum"] = optimum
     else:
         lines.append("no ground truth beside the log: no errors to report")
     paths = slam_report.write_outputs(out_dir, result, extra)

@@ -51,6 +51,7 @@ from mazeslam.evaluation.metrics import apply_se2
 from mazeslam.evaluation.scoring import DEAD_RECKONING, FILTER_MEAN, score_run
 from mazeslam.loaded_run import load_run
 from mazeslam.slam import SlamConfig, load_slam_config, slam_on_run
+from mazeslam.smooth_command import optimum_columns
 
 RESULTS = "runs.jsonl"
 MAPS = "maps"
@@ -194,6 +195,7 @@ def execute_run(sweep: Sweep, run: dict, maps_folder: str | None = None) -> dict
         "run_id": run_id(sweep, run), "seed": seed, **{k: cell_label(v) for k, v in run["settings"].items()},
         "ate_rmse": filter_row["ate_rmse"], "ate_aligned_rmse": filter_row["aligned_rmse"],
         "reckoning_ate_rmse": reckoning_row["ate_rmse"], "reckoning_ate_aligned_rmse": reckoning_row["aligned_rmse"],
+        **(optimum_columns(loaded, slam_config, score) or {}),
         "rpe_trans_rmse": filter_row["rpe_trans_rmse"], "rpe_rot_rmse": filter_row["rpe_rot_rmse"],
         "map_rmse": score.map_errors["as estimated"]["rmse"], "map_aligned_rmse": aligned_map_error["rmse"],
         "map_precision": aligned_map_error["precision"], "map_recall": aligned_map_error["recall"],
@@ -297,8 +299,8 @@ def _execute(sweep: Sweep, runs: list[dict], maps_folder: str, workers: int | No
             yield future.result()
 
 
-METRICS = ["ate_rmse", "ate_aligned_rmse", "reckoning_ate_rmse", "map_aligned_rmse", "rpe_trans_rmse",
-           "median_nees", "landmarks", "slam_seconds", "seconds_per_record"]
+METRICS = ["ate_rmse", "ate_aligned_rmse", "reckoning_ate_rmse", "optimum_ratio", "optimum_aligned_ratio",
+           "map_aligned_rmse", "rpe_trans_rmse", "median_nees", "landmarks", "slam_seconds", "seconds_per_record"]
 
 
 def summarise(table: pd.DataFrame, grid_keys: list[str], metrics: list[str] = METRICS) -> pd.DataFrame:
@@ -312,7 +314,7 @@ def summarise(table: pd.DataFrame, grid_keys: list[str], metrics: list[str] = ME
         row = dict(zip(grid_keys, key))
         row["runs"] = len(group)
         for metric in metrics:
-            values = group[metric].dropna().to_numpy(dtype=float)
+            values = group.get(metric, pd.Series(dtype=float)).dropna().to_numpy(dtype=float)  # absent from older tables
             mean = values.mean() if len(values) else math.nan
             half = (stats.t.ppf(0.975, len(values) - 1) * values.std(ddof=1) / math.sqrt(len(values))
                     if len(values) > 1 else math.nan)

@@ -15,6 +15,7 @@ import pandas as pd  # noqa: E402
 from mazeslam.evaluation.sweep import MAPS, summarise, summary_markdown  # noqa: E402
 
 PLOTTED = [("ate_rmse", "ATE RMSE [m]"), ("ate_aligned_rmse", "ATE RMSE, aligned [m]"),
+           ("optimum_ratio", "ATE / batch optimum's"), ("optimum_aligned_ratio", "ATE / batch optimum's, aligned"),
            ("map_aligned_rmse", "map RMSE, aligned [m]"), ("slam_seconds", "FastSLAM run time [s]")]
 
 
@@ -40,21 +41,25 @@ def make_report(out_dir: str | Path) -> list[Path]:
 
 
 def _plot_against(table: pd.DataFrame, key: str, others: list[str], out_dir: Path) -> Path:
-    """Each metric of ``PLOTTED`` against one grid setting, a line per combination of the others."""
+    """Each metric of ``PLOTTED`` the table has (older tables lack the optimum's) against one grid
+    setting, a line per combination of the others."""
+    plotted = [(metric, title) for metric, title in PLOTTED if table.get(metric, pd.Series()).notna().any()]
     summary = summarise(table, [key] + others)
-    fig, axes = plt.subplots(1, len(PLOTTED), figsize=(4.2 * len(PLOTTED), 3.6))
+    fig, axes = plt.subplots(1, len(plotted), figsize=(4.2 * len(plotted), 3.6))
     groups = summary.groupby(others) if others else [((), summary)]
     numeric = pd.api.types.is_numeric_dtype(summary[key])
     for label, group in groups:
         group = group.sort_values(key)
         name = ", ".join(f"{short_name(o)}={v}" for o, v in zip(others, label if isinstance(label, tuple) else (label,)))
-        for ax, (metric, title) in zip(axes, PLOTTED):
+        for ax, (metric, title) in zip(axes, plotted):
             x = group[key] if numeric else group[key].astype(str)
             ax.errorbar(x, group[metric], yerr=group[f"{metric}_ci95"].fillna(0), marker="o", capsize=3,
                         label=name or None)
-    for ax, (metric, title) in zip(axes, PLOTTED):
+    for ax, (metric, title) in zip(axes, plotted):
         if metric == "ate_rmse" and "reckoning_ate_rmse" in summary:
             ax.axhline(summary["reckoning_ate_rmse"].mean(), color="0.5", linestyle="--", label="dead reckoning")
+        if metric.startswith("optimum"):
+            ax.axhline(1.0, color="0.5", linestyle=":")  # as good as the batch optimum
         ax.set_title(title, fontsize=10)
         ax.set_xlabel(short_name(key))
         if numeric and summary[key].min() > 0 and summary[key].max() / summary[key].min() >= 20:
