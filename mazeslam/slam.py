@@ -111,14 +111,16 @@ def run_fastslam(course_log: log.CourseLog, params: FastSLAMParams | None = None
                 if laser is not None:
                     slam.predict_relative(laser_increments[record.index])
                 done = [record]
-                z, covariances, ids = _scan_observations(extractor, record)
+                z, covariances, facings = _scan_observations(extractor, record)
+                ids = None
                 if identify is not None:
                     ids = identify(record.index, z)
             else:  # landmark observations: all those taken at one time update together
                 done = _same_time_landmarks(records, position)
                 z = np.array([[r.range, r.bearing] for r in done])
-                covariances, ids = None, np.array([r.landmark for r in done])
-            reports.append(slam.update(z, covariances, ids if params.association == Association.KNOWN else None))
+                covariances, ids, facings = None, np.array([r.landmark for r in done]), None
+            reports.append(slam.update(z, covariances, ids if params.association == Association.KNOWN else None,
+                                       facings))
             if snapshot_every and (len(reports) - 1) % snapshot_every == 0:
                 snapshots.append((record.index, slam.poses.copy(), slam.landmarks()[0]))
         mean, best, spread = slam.mean_pose(), slam.poses[slam.best_particle()], slam.pose_covariance()
@@ -135,9 +137,9 @@ def run_fastslam(course_log: log.CourseLog, params: FastSLAMParams | None = None
 
 
 def _scan_observations(extractor: CornerExtractor, record: log.ScanRecord):
-    """Corner observations of one scan: (K, 2) range/bearing, (K, 2, 2) covariances, no ids."""
+    """Corner observations of one scan: (K, 2) range/bearing, (K, 2, 2) covariances, (K,) facings."""
     features = extractor.extract(record.ranges)
-    return features.observation_array(), features.observation_covariances(), None
+    return features.observation_array(), features.observation_covariances(), features.observation_facings()
 
 
 def _same_time_landmarks(records: list, position: int) -> list:

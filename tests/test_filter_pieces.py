@@ -77,13 +77,39 @@ def test_the_observation_proposal_draws_from_the_corrected_motion_gaussian():
     covariances = np.tile(np.diag([0.01, 0.01, 1e-6]), (count, 1, 1))
     landmark = np.array([1.0, 0.0])
     observation = np.array([[1.0, 0.0]])  # seen 1 m straight ahead: the robot is at the origin
-    drawn, carried = ObservationProposal().draw(
+    drawn, carried, (distance2, _) = ObservationProposal().draw(
         poses, covariances, np.zeros((count, 1), dtype=int), observation, np.tile(landmark, (count, 1, 1)),
         np.zeros((count, 1, 2, 2)), np.array([np.diag([1e-4, 1e-4])]), np.random.default_rng(5))
     # Along x: prior variance 0.01, measurement variance 1e-4 -> posterior mean 0.05 * 1e-4 / 0.0101.
     assert drawn[:, 0].mean() == pytest.approx(0.05 * 1e-4 / 0.0101, abs=2e-4)
     assert drawn[:, 0].std() == pytest.approx(math.sqrt(0.01 * 1e-4 / 0.0101), rel=0.05)
     np.testing.assert_array_equal(carried, 0.0)
+    # The weight's innovation: range 1 - 0.95 = 0.05 under variance 0.01 + 1e-4; bearing 0.
+    np.testing.assert_allclose(distance2[:, 0], 0.05**2 / 0.0101)
+
+
+def test_the_observation_proposal_weighs_by_the_joint_likelihood_of_the_scan():
+    # Two observations share the pose's uncertainty: the product of their sequential predictive
+    # densities must equal the joint Gaussian density of both, not the product of the marginals.
+    pose, spread = np.array([[0.02, -0.01, 0.05]]), np.array([np.diag([4e-4, 1e-4, 4e-3])])
+    landmarks = np.array([[[1.0, 0.2], [-0.3, 0.8]]])
+    observations = np.array([[1.01, 0.13], [0.86, 1.93]])
+    noise = np.array([np.diag([1e-4, 4e-4]), np.diag([2e-4, 1e-4])])
+    _, _, (distance2, determinant) = ObservationProposal().draw(
+        pose, spread, np.array([[0, 1]]), observations, landmarks, np.zeros((1, 2, 2, 2)), noise,
+        np.random.default_rng(0))
+    sequential = -0.5 * (distance2 + np.log(determinant)).sum()
+    z_hat, _, h_pose = ekf.range_bearing(np.repeat(pose, 2, axis=0), landmarks[0])
+    g = h_pose.reshape(4, 3)
+    joint_covariance = g @ spread[0] @ g.T + np.block([[noise[0], np.zeros((2, 2))], [np.zeros((2, 2)), noise[1]]])
+    residual = ekf.innovation(observations, z_hat).reshape(4)
+    joint = -0.5 * (residual @ np.linalg.solve(joint_covariance, residual) + np.log(np.linalg.det(joint_covariance)))
+    # Equal up to the linearisation at the corrected pose (second order in the small corrections).
+    assert sequential == pytest.approx(joint, abs=0.05)
+    marginals = -0.5 * sum(residual[2 * k: 2 * k + 2] @ np.linalg.solve(joint_covariance[2 * k: 2 * k + 2, 2 * k: 2 * k + 2],
+                                                                          residual[2 * k: 2 * k + 2])
+                           + np.log(np.linalg.det(joint_covariance[2 * k: 2 * k + 2, 2 * k: 2 * k + 2])) for k in range(2))
+    assert abs(marginals - joint) > 10 * abs(sequential - joint)
 
 
 def test_the_motion_proposal_draws_when_moving_and_carries_nothing():

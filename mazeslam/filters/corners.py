@@ -97,6 +97,10 @@ class CornerObservation:
         covariance_xy: (2, 2) covariance of (x, y), m^2.
         covariance_rb: (2, 2) covariance of (range, bearing).
         beam: index of the beam nearest to it.
+        facing: the direction the landmark faces, towards the side it is seen from (rad, robot
+            frame): a corner's bisector of its two walls' normals, a segment end's wall normal.
+            Two landmarks a wall's thickness apart (the two face corners of a wall end; the
+            corners either side of a thin wall) face far apart ways: it tells them apart.
     """
 
     x: float
@@ -107,6 +111,7 @@ class CornerObservation:
     covariance_xy: np.ndarray
     covariance_rb: np.ndarray
     beam: int
+    facing: float
 
     @property
     def fixed(self) -> bool:
@@ -132,6 +137,10 @@ class ScanFeatures:
     def observation_array(self) -> np.ndarray:
         """(K, 2) observation ranges and bearings, the filter's input."""
         return np.array([[o.range, o.bearing] for o in self.observations]).reshape(-1, 2)
+
+    def observation_facings(self) -> np.ndarray:
+        """(K,) the observations' facing directions (rad, robot frame)."""
+        return np.array([o.facing for o in self.observations], dtype=float)
 
     def observation_covariances(self) -> np.ndarray:
         """(K, 2, 2) the observations' range/bearing covariances."""
@@ -216,22 +225,24 @@ class CornerExtractor:
                     corner_after[i] = corner_before[j] = True
                     if self.params.mode == "corners":
                         point, covariance = corner
+                        facing = _toward_sensor(segments[i].normal + segments[j].normal)
                         observations.append(self._observation(point, np.array(covariance), "corner",
-                                                              beams[segments[i].last]))
+                                                              beams[segments[i].last], facing))
         for i, segment in enumerate(segments):
             for at_start in (True, False):
                 position = segment.first if at_start else segment.last
                 has_corner = corner_before[i] if at_start else corner_after[i]
                 kind = "corner" if has_corner else self._end_kind(ranges, valid, breaks, beams[position], at_start,
                                                                   segment)
+                facing = _toward_sensor(segment.normal)
                 if self.params.mode == "endpoints":
                     point = segment.start if at_start else segment.end
                     observations.append(self._observation(point, self._end_covariance(segment, point), kind,
-                                                          beams[position]))
+                                                          beams[position], facing))
                 elif kind == "wall_end":
                     end = self._wall_end(segment, beams[position], at_start)
                     if end is not None:
-                        observations.append(self._observation(*end, kind, beams[position]))
+                        observations.append(self._observation(*end, kind, beams[position], facing))
         return observations
 
     def _end_kind(self, ranges, valid, breaks, beam: int, at_start: bool, segment: LineSegment) -> str:
@@ -321,14 +332,20 @@ class CornerExtractor:
         return np.array([[across * c * c + along_var * s * s, (across - along_var) * c * s],
                          [(across - along_var) * c * s, across * s * s + along_var * c * c]])
 
-    def _observation(self, point_sensor, covariance_xy, kind: str, beam: int) -> CornerObservation:
+    def _observation(self, point_sensor, covariance_xy, kind: str, beam: int, facing: float) -> CornerObservation:
         x, y = float(point_sensor[0]) + self._mount_x, float(point_sensor[1]) + self._mount_y
         rng2 = x * x + y * y
         rng = math.sqrt(rng2)
         jacobian = (x / rng, y / rng, -y / rng2, x / rng2)  # d(range, bearing)/d(x, y)
         covariance_xy = np.asarray(covariance_xy)
         return CornerObservation(x, y, rng, math.atan2(y, x), kind, covariance_xy,
-                                 np.array(_sandwich(jacobian, covariance_xy.tolist())), int(beam))
+                                 np.array(_sandwich(jacobian, covariance_xy.tolist())), int(beam), facing)
+
+
+def _toward_sensor(normal: np.ndarray) -> float:
+    """The angle (rad) of ``-normal``: a line's normal (cos alpha, sin alpha) points away from the
+    sensor (r >= 0), so its opposite is the way the wall faces."""
+    return math.atan2(-normal[1], -normal[0])
 
 
 def _line_offset_variance(covariance: np.ndarray, along: float) -> float:

@@ -14,6 +14,7 @@ State (all world frame, metres and radians):
     seen         (P, M)        times the landmark was observed
     missed       (P, M)        scans it was predicted in view but not observed (tentative ones only)
     ids          (P, M)        known identity of the landmark (-1: unknown)
+    facings      (P, M)        world direction the landmark faces (rad; NaN: unknown)
     pose_covariances (P, 3, 3) FastSLAM 2.0 only: covariance of the motion since the last scan;
                                ``poses`` then holds the mean of that motion until a scan samples it
 
@@ -86,6 +87,11 @@ class FastSLAMParams:
             it from the motion model combined with the scan's observations (FastSLAM 2.0,
             Montemerlo et al. 2003), which keeps more particles alive when the sensor is much more
             precise than the odometry.
+        facing_gate: degrees; with unknown association, an observation is not associated with a
+            landmark that faces more than this away from it (``CornerObservation.facing``): the two
+            face corners of a wall end lie a wall's thickness apart but face opposite ways, the
+            corners either side of a T-junction's stem 90 degrees apart, while one point seen as a
+            corner or as a wall end faces 45 degrees apart. 180: off.
         seed: seeds the filter's random draws.
     """
 
@@ -102,7 +108,8 @@ class FastSLAMParams:
     association: Association = Association.UNKNOWN
     view_range: float = 0.25
     tentative_limit: int = 3
-    version: int = 1
+    version: int = 2
+    facing_gate: float = 67.5
     seed: int = 0
 
     def __post_init__(self):
@@ -119,6 +126,7 @@ class FastSLAMParams:
                 f"association must be one of {', '.join(Association)}, got {self.association!r}")
         object.__setattr__(self, "association", Association(self.association))
         require(self.view_range >= 0 and self.tentative_limit >= 1, "view_range must be >= 0 and tentative_limit >= 1")
+        require(0 < self.facing_gate <= 180, f"facing_gate must be in (0, 180] degrees, got {self.facing_gate}")
         require(self.version in PROPOSALS, f"version must be 1 or 2 (FastSLAM 1.0 or 2.0), got {self.version}")
 
     @property
@@ -191,6 +199,7 @@ class FastSLAM:
         self.seen = np.zeros((p, capacity), dtype=np.int32)
         self.missed = np.zeros((p, capacity), dtype=np.int32)
         self.ids = np.full((p, capacity), -1, dtype=np.int64)
+        self.facings = np.full((p, capacity), np.nan)
         self.pose_covariances = np.zeros((p, 3, 3))
         self.resamplings = 0
 
@@ -239,7 +248,7 @@ class FastSLAM:
 
     # -- update -------------------------------------------------------------------------------
     def update(self, observations: np.ndarray, covariances: np.ndarray | None = None,
-               ids: np.ndarray | None = None) -> UpdateReport:
+               ids: np.ndarray | None = None, facings: np.ndarray | None = None) -> UpdateReport:
         """Weigh and correct every particle with one scan's observations.
 
         Args:
@@ -247,6 +256,7 @@ class FastSLAM:
             covariances: (K, 2, 2) their covariances, or None.
             ids: (K,) known landmark identities (``association="known"``; -1: none, the observation
                 is left out and counted as ambiguous), else None.
+            facings: (K,) the directions the observed landmarks face (rad, robot frame), or None.
         Steps: 1. associate (with the pose's uncertainty for FastSLAM 2.0); 2. draw the poses
         (FastSLAM 2.0); 3. update matched landmarks, start new ones and weigh the particles;
         4. drop tentative landmarks that were missed; 5. resample when the weights degenerate.
@@ -263,22 +273,27 @@ class FastSLAM:
         m = self._used_slots()
         # 1. Association, under the model the weights use.
         prior = self._model(observations, noise, m, self.proposal.carries_pose_uncertainty)
+        relative_facings = None if facings is None else np.asarray(facings, dtype=float)
         if known and count:
             assigned = associate_known(np.asarray(ids), self.ids[:, :m], self.exists[:, :m])
         else:
+            if relative_facings is not None and m and self.params.facing_gate < 180:
+                self._gate_by_facing(prior.distance2, relative_facings, m)
             assigned = associate_greedy(prior.distance2, self.params.gate)
         # 2. The proposal's draw; the landmarks are then corrected at the drawn poses.
         model = prior
+        self.poses, self.pose_covariances, joint = self.proposal.draw(
+            self.poses, self.pose_covariances, assigned, observations, self.means, self.covariances, noise, self.rng)
         if self.proposal.carries_pose_uncertainty:
-            self.poses, self.pose_covariances = self.proposal.draw(
-                self.poses, self.pose_covariances, assigned, observations, self.means, self.covariances, noise,
-                self.rng)
             model = self._model(observations, noise, m, with_pose_uncertainty=False)
         # 3. Landmarks and weights, observation by observation.
-        report.nis = _normalised_innovations(prior.distance2, assigned, self.weights())
+        likelihood = joint if joint is not None else _associated_terms(prior, assigned)
+        report.nis = _normalised_innovations(likelihood[0], assigned, self.weights())
         matched_now = np.zeros_like(self.exists)
         for k in range(count):
-            self._apply(k, assigned[:, k], model, prior, observations[k], noise[k], ids, matched_now, report)
+            self._apply(k, assigned[:, k], model, prior.distance2, likelihood, observations[k], noise[k],
+                        None if ids is None else ids[k], None if relative_facings is None else relative_facings[k],
+                        matched_now, report)
         # 4. Tentative landmarks predicted in view but not seen.
         if count:
             self._manage_landmarks(model.rho, matched_now, report)
@@ -314,22 +329,23 @@ class FastSLAM:
         distance2[~np.broadcast_to(self.exists[:, None, :m], distance2.shape)] = np.inf
         return MeasurementModel(rho, bearing, h, (nu0, nu1), det, distance2)
 
-    def _apply(self, k, slots, model: MeasurementModel, prior: MeasurementModel, observation, noise, ids,
-               matched_now, report) -> None:
+    def _apply(self, k, slots, model: MeasurementModel, distance2: np.ndarray, likelihood, observation, noise,
+               identity, facing, matched_now, report) -> None:
         """EKF-update the landmarks matched by observation k, start new ones, and weigh the particles.
 
-        ``model`` linearises at the poses the particles now have; ``prior`` is the model the
-        association used, whose Mahalanobis distances weigh the particles (the same for FastSLAM
-        1.0; for 2.0 it includes the motion's uncertainty, before the pose was drawn).
+        ``model`` linearises at the poses the particles now have; ``distance2`` (P, K, m) is the
+        association's, which decides whether an unmatched observation is new; ``likelihood`` the
+        squared Mahalanobis distances and determinants (P, K) of the associated observations that
+        weigh the particles (the association's for FastSLAM 1.0; the joint scan likelihood's
+        factors for 2.0). ``identity`` and ``facing`` are the observation's (None: unknown).
         """
-        distance2 = prior.distance2
         rows = np.flatnonzero(slots >= 0)
         if len(rows):
             j = slots[rows]
             residual = np.column_stack([model.nu[0][rows, k, j], model.nu[1][rows, k, j]])
             self.means[rows, j], self.covariances[rows, j], _ = ekf.update(
                 self.means[rows, j], self.covariances[rows, j], residual, model.jacobians(rows, j), noise)
-            self.log_weights[rows] += (-0.5 * distance2[rows, k, j] - LOG_TWO_PI - 0.5 * np.log(prior.det[rows, k, j]))
+            self.log_weights[rows] += (-0.5 * likelihood[0][rows, k] - LOG_TWO_PI - 0.5 * np.log(likelihood[1][rows, k]))
             self.seen[rows, j] += 1
             self.missed[rows, j] = 0
             matched_now[rows, j] = True
@@ -337,19 +353,20 @@ class FastSLAM:
         unmatched = slots < 0
         nearest = distance2[:, k].min(axis=1, initial=np.inf)
         if self.params.association == Association.KNOWN:  # an identity not yet mapped starts a landmark; none (-1): left out
-            new = unmatched & (ids[k] >= 0)
+            new = unmatched & (identity >= 0)
         else:
             new = unmatched & (nearest >= self.params.new_landmark_gate)
         report.ambiguous += int((unmatched & ~new).sum())
         if new.any():
-            self._add_landmarks(np.flatnonzero(new), observation, noise, None if ids is None else ids[k], matched_now)
+            self._add_landmarks(np.flatnonzero(new), observation, noise, identity, facing, matched_now)
             # A new landmark's likelihood: the density at the edge of the new-landmark gate.
             self.log_weights[new] += -0.5 * self.params.new_landmark_gate - LOG_TWO_PI - 0.5 * math.log(
                 np.linalg.det(noise))
             report.new += int(new.sum())
 
-    def _add_landmarks(self, rows: np.ndarray, observation, noise, identity, matched_now) -> None:
-        """Initialise a landmark from one observation in each particle of ``rows``."""
+    def _add_landmarks(self, rows: np.ndarray, observation, noise, identity, facing, matched_now) -> None:
+        """Initialise a landmark from one observation in each particle of ``rows`` (its identity
+        and its facing relative to the robot, rad, or None)."""
         slots = (~self.exists[rows]).argmax(axis=1)  # the first free slot (update made room)
         rho, bearing = observation
         angle = self.poses[rows, 2] + bearing
@@ -362,6 +379,7 @@ class FastSLAM:
         self.seen[rows, slots] = 1
         self.missed[rows, slots] = 0
         self.ids[rows, slots] = -1 if identity is None else identity
+        self.facings[rows, slots] = np.nan if facing is None else wrap_angle(self.poses[rows, 2] + facing)
         matched_now[rows, slots] = True
 
     def _grow(self) -> None:
@@ -373,6 +391,15 @@ class FastSLAM:
         self.seen = np.concatenate([self.seen, np.zeros((p, m), dtype=np.int32)], axis=1)
         self.missed = np.concatenate([self.missed, np.zeros((p, m), dtype=np.int32)], axis=1)
         self.ids = np.concatenate([self.ids, np.full((p, m), -1, dtype=np.int64)], axis=1)
+        self.facings = np.concatenate([self.facings, np.full((p, m), np.nan)], axis=1)
+
+    def _gate_by_facing(self, distance2: np.ndarray, facings: np.ndarray, m: int) -> None:
+        """Rule out (inf in ``distance2`` (P, K, m)) every pair whose landmark faces more than
+        ``facing_gate`` away from the observation (``facings`` (K,) relative to the robot, rad);
+        landmarks or observations of unknown facing (NaN) are not ruled out."""
+        world = self.poses[:, None, 2] + facings[None, :]  # (P, K)
+        apart = np.abs(wrap_angle(world[:, :, None] - self.facings[:, None, :m]))
+        distance2[apart > math.radians(self.params.facing_gate)] = np.inf  # NaN compares False: kept
 
     def _manage_landmarks(self, predicted_range: np.ndarray, matched_now: np.ndarray, report: UpdateReport) -> None:
         """Count misses of tentative landmarks predicted in view (``predicted_range`` (P, m) of the
@@ -396,7 +423,7 @@ class FastSLAM:
     def resample(self) -> None:
         """Low-variance (systematic) resampling; weights become uniform."""
         index = systematic_resample(self.weights(), self.rng)
-        for name in ("poses", "means", "covariances", "exists", "seen", "missed", "ids", "pose_covariances"):
+        for name in ("poses", "means", "covariances", "exists", "seen", "missed", "ids", "facings", "pose_covariances"):
             setattr(self, name, getattr(self, name)[index])
         self.log_weights = np.full(len(index), -math.log(len(index)))
         self.resamplings += 1
@@ -428,13 +455,24 @@ class FastSLAM:
         return self.means[particle, keep], self.covariances[particle, keep]
 
 
+def _associated_terms(model: MeasurementModel, assigned: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The squared Mahalanobis distance and determinant (P, K) of each observation's innovation
+    with the slot ``assigned`` (P, K) to it (NaN where none)."""
+    rows, observations = np.nonzero(assigned >= 0)
+    distance2, determinant = np.full(assigned.shape, np.nan), np.full(assigned.shape, np.nan)
+    slots = assigned[rows, observations]
+    distance2[rows, observations] = model.distance2[rows, observations, slots]
+    determinant[rows, observations] = model.det[rows, observations, slots]
+    return distance2, determinant
+
+
 def _normalised_innovations(distance2: np.ndarray, assigned: np.ndarray, weights: np.ndarray) -> np.ndarray:
-    """NIS (A,) of the observations that some particle associated: for observation k, the
-    weight-averaged squared Mahalanobis distance ``distance2`` (P, K, M) over the particles whose
-    ``assigned`` (P, K) slot is not -1, with their normalised ``weights`` (P,)."""
+    """NIS (A,) of the observations that most of the weight associates: for observation k, the
+    weight-averaged squared Mahalanobis distance ``distance2`` (P, K) over the particles whose
+    ``assigned`` (P, K) slot is not -1, with their normalised ``weights`` (P,) before the scan."""
     values = []
     for k in range(assigned.shape[1]):
         rows = np.flatnonzero(assigned[:, k] >= 0)
-        if len(rows):
-            values.append(np.average(distance2[rows, k, assigned[rows, k]], weights=weights[rows] + 1e-300))
+        if weights[rows].sum() > 0.5:
+            values.append(np.average(distance2[rows, k], weights=weights[rows]))
     return np.asarray(values, dtype=float)

@@ -37,8 +37,9 @@ class MotionProposal:
         return predict_relative(poses, increment, covariance, rng), pose_covariances
 
     def draw(self, poses, pose_covariances, assigned, observations, means, covariances, noise, rng):
-        """Nothing left to draw: the poses already hold their motion noise."""
-        return poses, pose_covariances
+        """Nothing left to draw: the poses already hold their motion noise, and each observation's
+        likelihood is its own (None: the weights use the association's model)."""
+        return poses, pose_covariances, None
 
 
 class ObservationProposal:
@@ -85,9 +86,16 @@ class ObservationProposal:
             observations: (K, 2) range (m) and bearing (rad) in the robot frame.
             means, covariances: (P, M, 2) and (P, M, 2, 2) every particle's landmarks.
             noise: (K, 2, 2) the observations' noise R.
-        Returns the drawn poses (P, 3) and zeroed pose covariances.
+        Returns the drawn poses (P, 3), zeroed pose covariances, and for the weights the squared
+        Mahalanobis distance and determinant (P, K) of each associated observation's innovation
+        under its predictive covariance given the scan's observations before it (NaN where not
+        associated). Their product over the scan is the joint likelihood of the scan; each
+        observation's marginal alone would count the motion's uncertainty, which all of them
+        share, once per observation.
         """
         mean, covariance = poses.copy(), pose_covariances.copy()
+        distance2 = np.full(assigned.shape, np.nan)
+        determinant = np.full(assigned.shape, np.nan)
         for k, observation in enumerate(observations):
             rows = np.flatnonzero(assigned[:, k] >= 0)
             if not len(rows):
@@ -95,11 +103,13 @@ class ObservationProposal:
             slots = assigned[rows, k]
             z_hat, h_landmark, h_pose = ekf.range_bearing(mean[rows], means[rows, slots])
             landmark_noise = h_landmark @ covariances[rows, slots] @ np.swapaxes(h_landmark, -1, -2) + noise[k]
-            mean[rows], covariance[rows], _ = ekf.update(mean[rows], covariance[rows],
-                                                         ekf.innovation(observation, z_hat), h_pose, landmark_noise)
+            residual = ekf.innovation(observation, z_hat)
+            mean[rows], covariance[rows], s = ekf.update(mean[rows], covariance[rows], residual, h_pose, landmark_noise)
+            distance2[rows, k] = np.einsum("ni,nij,nj->n", residual, np.linalg.inv(s), residual)
+            determinant[rows, k] = np.linalg.det(s)
         drawn = ekf.sample_gaussians(mean, covariance, rng)
         drawn[:, 2] = wrap_angle(drawn[:, 2])
-        return drawn, np.zeros_like(covariance)
+        return drawn, np.zeros_like(covariance), (distance2, determinant)
 
 
 def _propagate(covariance: np.ndarray, f: np.ndarray, v: np.ndarray, motion: np.ndarray) -> np.ndarray:
