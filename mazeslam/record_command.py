@@ -22,9 +22,7 @@ def run_record(out, port=None, camera=None, sim=False, maze="random", seed=0, be
     geometry = with_changes(EXERCISE_CONVENTION, **(geometry_overrides or {}))
     config = SimulationConfig()
     if sim:
-        laser = dataclasses.replace(config.laser, beams=beams, first_beam_angle=geometry.first_beam_angle,
-                                    direction=geometry.direction, mount_x=geometry.mount_x)
-        config = dataclasses.replace(config, laser=laser)
+        config = dataclasses.replace(config, laser=dataclasses.replace(config.laser, beams=beams, geometry=geometry))
         chosen = generate_maze(config.maze.rows, config.maze.cols, seed) if maze == "random" else load_maze(maze)
         robot = SimulatedRobot(chosen, config, seed)
     else:

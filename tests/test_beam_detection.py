@@ -7,7 +7,7 @@ import pytest
 
 from mazeslam import log, simulate
 from mazeslam.beam_detection import detect_beam_convention
-from mazeslam.beams import EXERCISE_CONVENTION
+from mazeslam.beams import EXERCISE_CONVENTION, BeamGeometry
 from mazeslam.envs.laser import LaserParams
 from mazeslam.envs.simulator import SimulationConfig
 
@@ -19,7 +19,7 @@ def angle_gap_degrees(a, b):
 @pytest.mark.parametrize("first_beam_angle", [0.0, -math.pi, math.pi / 2])
 @pytest.mark.parametrize("direction", [1, -1])
 def test_finds_the_convention_a_simulated_log_was_written_with(tmp_path, first_beam_angle, direction):
-    laser = LaserParams(first_beam_angle=first_beam_angle, direction=direction)
+    laser = LaserParams(geometry=BeamGeometry(first_beam_angle=first_beam_angle, direction=direction))
     config = dataclasses.replace(SimulationConfig(), laser=laser)
     run = simulate(tmp_path / "run.log", config=config, seed=3, duration=60, progress=False)
     detection = detect_beam_convention(log.read(run.log_path), step_degrees=2, max_pairs=20)

@@ -5,6 +5,7 @@ import numpy as np
 import pytest
 
 from mazeslam import log, sidecars, simulate
+from mazeslam.beams import BeamGeometry
 from mazeslam.config import ConfigError
 from mazeslam.envs.laser import LaserParams, cast_rays
 from mazeslam.envs.maze import generate_maze, load_maze
@@ -53,11 +54,13 @@ def test_16x16_maze_scans_agree_with_truth_and_map(tmp_path):
 
 
 def test_other_beam_conventions_and_mounting_are_recorded_and_cast(tmp_path):
-    laser = LaserParams(beams=90, first_beam_angle=np.pi / 2, direction=-1, mount_x=0.02)
+    laser = LaserParams(beams=90, geometry=BeamGeometry(first_beam_angle=np.pi / 2, direction=-1, mount_x=0.02))
     config = dataclasses.replace(SimulationConfig(), laser=laser)
     result = simulate(tmp_path / "conv.log", config=config, seed=1, duration=30, progress=False)
     _, _, world = assert_scans_match_truth_and_map(result.log_path)
     assert world["sensor"]["direction"] == -1 and world["sensor"]["mount_x"] == 0.02
+    assert list(world["sensor"]) == ["beams", "max_range", "min_range", "range_noise_std", "dropout",
+                                     "first_beam_angle", "direction", "field_of_view", "mount_x", "mount_y"]
 
 
 def test_same_seed_same_bytes_other_seed_other_run(tmp_path):
@@ -141,11 +144,19 @@ def test_toml_overrides_only_what_it_names(tmp_path):
     assert config.laser.max_range == LaserParams().max_range
 
 
+def test_toml_sets_the_beam_geometry_in_its_own_table(tmp_path):
+    path = tmp_path / "c.toml"
+    path.write_text("[laser]\nbeams = 90\n[laser.geometry]\nfirst_beam_angle = 0.0\nmount_x = 0.03\n")
+    assert load_config(path).laser == LaserParams(beams=90, geometry=BeamGeometry(first_beam_angle=0.0, mount_x=0.03))
+
+
 @pytest.mark.parametrize(
     "text, message",
     [
         ("[laser]\nbeam = 90\n", r"c.toml \[laser\]: unknown parameter\(s\) beam"),
         ("[laser]\nbeams = 0\n", r"c.toml \[laser\]: laser beams must be at least 1"),
+        ("[laser]\nmount_x = 0.1\n", r"c.toml \[laser\]: unknown parameter\(s\) mount_x; known: .*geometry"),
+        ("[laser.geometry]\ndirection = 2\n", r"c.toml \[laser\] \[geometry\]: beam direction must be \+1 or -1"),
         ("[logger]\nscan_period = -1\n", "scan_period must be positive"),
         ("[drive]\ncruise_speed = 0.5\n", "exceeds the robot's max_wheel_speed"),
         ("[laser\n", "not valid TOML"),

@@ -8,7 +8,7 @@ range of 0 means "no return" (out of range or dropped), as in the course log for
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field, fields
 
 import numpy as np
 
@@ -30,8 +30,9 @@ class LaserParams:
         min_range: shortest range reported, metres; nearer walls give 0 (the camera's blind disc).
         range_noise_std: standard deviation of the Gaussian range noise, metres.
         dropout: probability that a beam returns nothing (0), independent per beam.
-        first_beam_angle, direction, field_of_view, mount_x, mount_y: the beam geometry written to
-            the log's sidecar (see ``mazeslam.beams.BeamGeometry``); radians and metres.
+        geometry: where the beams point and where the sensor sits on the robot (TOML
+            ``[laser.geometry]``; default: the exercise's convention, beam 0 behind, mounted on the
+            wheel axle).
     """
 
     beams: int = 180
@@ -39,11 +40,7 @@ class LaserParams:
     min_range: float = 0.0
     range_noise_std: float = 0.003
     dropout: float = 0.0
-    first_beam_angle: float = -np.pi
-    direction: int = 1
-    field_of_view: float = 2 * np.pi
-    mount_x: float = 0.0
-    mount_y: float = 0.0
+    geometry: BeamGeometry = field(default_factory=BeamGeometry)
 
     def __post_init__(self):
         require(self.beams >= 1, f"laser beams must be at least 1, got {self.beams}")
@@ -52,12 +49,13 @@ class LaserParams:
                 f"laser min_range must be in [0, max_range), got {self.min_range}")
         require(self.range_noise_std >= 0, f"laser range_noise_std must be >= 0, got {self.range_noise_std}")
         require(0 <= self.dropout < 1, f"laser dropout must be in [0, 1), got {self.dropout}")
-        self.geometry  # validates direction and field of view
 
-    @property
-    def geometry(self) -> BeamGeometry:
-        return BeamGeometry(self.first_beam_angle, self.direction, self.field_of_view,
-                            self.mount_x, self.mount_y)
+    def sensor_mapping(self) -> dict:
+        """The map sidecar's ``sensor``: these settings with the geometry's fields beside them
+        (flat: ``beams``, ``max_range``, ..., ``first_beam_angle``, ``direction``, ...), as
+        ``mazeslam.sidecars.beam_geometry`` reads them."""
+        settings = {f.name: getattr(self, f.name) for f in fields(self) if f.name != "geometry"}
+        return {**settings, **self.geometry.to_dict()}
 
 
 class RayCaster:
@@ -143,7 +141,7 @@ class VirtualLaser:
     def __init__(self, params: LaserParams, surfaces: np.ndarray):
         self.params = params
         self.bearings = params.geometry.bearings(params.beams)  # (N,) robot frame, radians
-        self.mount = (params.mount_x, params.mount_y)
+        self.mount = (params.geometry.mount_x, params.geometry.mount_y)
         self.caster = RayCaster(surfaces, self.bearings, params.max_range)
 
     def true_ranges(self, pose: np.ndarray) -> np.ndarray:

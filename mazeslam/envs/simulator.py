@@ -180,7 +180,7 @@ def simulate(
     times, poses = np.array(times), np.array(poses).reshape(-1, 3)
     truth_file, map_file = sidecars.truth_path(out), sidecars.map_path(out)
     sidecars.write_truth(truth_file, times, poses)
-    sensor = to_mapping(config.laser)
+    sensor = config.laser.sensor_mapping()
     sidecars.write_map(
         map_file, walls.surfaces, walls.corners, sensor,
         corner_convex=walls.corner_convex.tolist(),

@@ -63,7 +63,7 @@ class RecordCourseLog(gym.Wrapper):
         base = self.env.unwrapped
         path = self.log_paths[-1]
         sidecars.write_truth(sidecars.truth_path(path), np.array(self._times), np.array(self._poses))
-        sidecars.write_map(sidecars.map_path(path), base.walls.surfaces, base.walls.corners, to_mapping(base.config.laser),
+        sidecars.write_map(sidecars.map_path(path), base.walls.surfaces, base.walls.corners, base.config.laser.sensor_mapping(),
                            corner_convex=base.walls.corner_convex.tolist(), start_pose=base.start_pose.tolist(),
                            maze={"rows": base.maze.rows, "cols": base.maze.cols, "cell_size": base.maze.cell_size,
                                  "wall_thickness": base.maze.wall_thickness, "text": base.maze.to_text()},
