@@ -18,8 +18,8 @@ PENINSULA = np.vstack([
 ])
 
 
-def scan(surfaces, pose, noise=0.0, seed=0, **laser):
-    params = LaserParams(range_noise_std=noise, max_range=laser.pop("max_range", 3.0), **laser)
+def scan(surfaces, pose, noise=0.0, seed=0, beams=180, max_range=3.0, **geometry):
+    params = LaserParams(beams, max_range, range_noise_std=noise, geometry=BeamGeometry(**geometry))
     return VirtualLaser(params, surfaces).scan(np.asarray(pose, dtype=float), np.random.default_rng(seed)), params
 
 

@@ -10,7 +10,7 @@ from mazeslam.envs.laser import LaserParams
 from mazeslam.envs.simulator import SimulationConfig
 from mazeslam.evaluation.metrics import absolute_trajectory_error, align_se2, apply_se2, map_error
 from mazeslam.filters.motion import dead_reckoning
-from mazeslam.beams import SensorOverrides
+from mazeslam.beams import BeamGeometry, SensorOverrides
 from mazeslam.slam import SlamConfig, slam_on_file
 
 
@@ -49,7 +49,7 @@ def test_same_seed_same_estimate(default_run):
 
 @pytest.fixture(scope="module")
 def mounted_run(tmp_path_factory):
-    config = dataclasses.replace(SimulationConfig(), laser=LaserParams(mount_x=0.04))
+    config = dataclasses.replace(SimulationConfig(), laser=LaserParams(geometry=BeamGeometry(mount_x=0.04)))
     return simulate(tmp_path_factory.mktemp("mounted") / "run.log", config=config, seed=0, progress=False)
 
 
