@@ -8,6 +8,7 @@ import sys
 import numpy as np
 import pytest
 from click.testing import CliRunner
+from conftest import PROJECT_ROOT
 
 from mazeslam import sidecars
 from mazeslam.cli import main
@@ -100,6 +101,18 @@ def test_run_dir_goes_with_from_run_only(default_run, args):
     result = CliRunner().invoke(main, ["smooth", str(default_run.log_path), *args])
     assert result.exit_code == 2
     assert "RUN_DIR goes with --association from-run" in result.output
+
+
+def test_from_run_on_the_exercise_robot_log(course_log_path, tmp_path):
+    options = ["--config", PROJECT_ROOT / "configs" / "course.toml", "--first-beam-angle", 0]
+    assert invoke("slam", course_log_path, *options, "--out", tmp_path / "slam", "--quiet").exit_code == 0
+    result = invoke("smooth", course_log_path, *options, "--association", "from-run", tmp_path / "slam",
+                    "--out", tmp_path / "smooth")
+    assert result.exit_code == 0, result.output
+    assert "no ground truth beside the log" in result.output
+    document = strict_json(tmp_path / "smooth" / "map.json")
+    assert document["converged"] and len(document["landmarks"]) > 0
+    assert "ate" not in document
 
 
 def test_from_run_refuses_a_folder_that_is_not_a_slam_run(default_run, tmp_path):
