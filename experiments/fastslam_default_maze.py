@@ -31,7 +31,7 @@ from mazeslam.slam import SlamConfig, slam_on_file
 
 SEEDS = range(5)
 IDEAL_FILTER = dict(association="known", sigmaR=0.0005, sigmaB=math.radians(0.1),
-                    use_observation_covariance=True, NPARTICLES=1000)
+                    NPARTICLES=1000)
 
 
 def rows_for(seed: int, folder: Path, filter_seeds: int = 1, ideal: bool = False) -> list[dict]:

@@ -120,7 +120,7 @@ def test_noise_free_problem_is_recovered_from_a_perturbed_start():
     truth = dead_reckoning(log, start)[log.is_scan]  # (3, 3) the scan poses
     landmarks = np.array([[1.0, 0.8], [0.6, -0.5]])
     observations = [observe(np.repeat(pose[None], 2, 0), landmarks) for pose in truth]
-    params = FastSLAMParams(sigmaR=0.01, sigmaB=0.01, use_observation_covariance=False)
+    params = FastSLAMParams(sigmaR=0.01, sigmaB=0.01, observation_scale=0.0)
     problem = build_problem(log, observations, [np.zeros((2, 2, 2))] * 3, [np.array([5, 9])] * 3, params, start)
     rng = np.random.default_rng(4)
     problem.initial_poses = truth + rng.normal(0, [0.05, 0.05, 0.1], (3, 3))

@@ -67,11 +67,13 @@ class FastSLAMParams:
         sigmaTH: odometry heading noise from turning, rad per sqrt(rad) turned.
         sigmaTH_drive: odometry heading noise from driving, rad per sqrt(m) travelled.
         sigmaR, sigmaB: range (m) and bearing (rad) noise of an observation; with
-            ``use_observation_covariance`` added to the covariance the corner extractor reports,
+            ``observation_scale`` added to the covariance the corner extractor reports,
             which already carries the laser's range noise, so the defaults are small (1 mm,
             0.29 degrees): 3 mm and 1 degree counted that noise twice and doubled the aligned
             ATE over 20 seeds (docs/fastslam.md).
-        use_observation_covariance: use each observation's own covariance (from the line fits).
+        observation_scale: each observation's own covariance (from the corner extractor's line
+            fits) enters the noise multiplied by this (0: not used; ``mazeslam calibrate``
+            measures it).
         gate: Mahalanobis gate (squared) for associating an observation with a landmark
             (9.21: 99 % of a 2-D Gaussian).
         new_landmark_gate: an unassociated observation farther (squared Mahalanobis) than this
@@ -101,7 +103,7 @@ class FastSLAMParams:
     sigmaTH_drive: float = 0.1
     sigmaR: float = 0.001
     sigmaB: float = 0.005
-    use_observation_covariance: bool = True
+    observation_scale: float = 1.0
     gate: float = 9.21
     new_landmark_gate: float = 16.0
     resample_threshold: float = 0.5
@@ -117,8 +119,9 @@ class FastSLAMParams:
         for name in ("sigmaR", "sigmaB"):
             require(getattr(self, name) >= 0, f"{name} must be >= 0, got {getattr(self, name)}")
         OdometryNoise(self.sigmaX, self.sigmaTH, self.sigmaTH_drive)  # checks the odometry terms
-        require(self.sigmaR > 0 or self.use_observation_covariance,
-                "sigmaR must be positive unless use_observation_covariance is on")
+        require(self.observation_scale >= 0, f"observation_scale must be >= 0, got {self.observation_scale}")
+        require(self.sigmaR > 0 or self.observation_scale > 0,
+                "sigmaR must be positive unless the observations' own covariances are used (observation_scale > 0)")
         require(0 < self.gate <= self.new_landmark_gate,
                 f"need 0 < gate <= new_landmark_gate, got {self.gate} and {self.new_landmark_gate}")
         require(0 <= self.resample_threshold <= 1, f"resample_threshold must be in [0, 1], got {self.resample_threshold}")
@@ -128,6 +131,14 @@ class FastSLAMParams:
         require(self.view_range >= 0 and self.tentative_limit >= 1, "view_range must be >= 0 and tentative_limit >= 1")
         require(0 < self.facing_gate <= 180, f"facing_gate must be in (0, 180] degrees, got {self.facing_gate}")
         require(self.version in PROPOSALS, f"version must be 1 or 2 (FastSLAM 1.0 or 2.0), got {self.version}")
+
+    def observation_noise(self, covariances: np.ndarray | None, count: int) -> np.ndarray:
+        """Observation noise R (K, 2, 2) of ``count`` observations: diag(sigmaR^2, sigmaB^2) plus
+        ``observation_scale`` times each one's own covariance (K, 2, 2) when given."""
+        fixed = np.diag([self.sigmaR**2, self.sigmaB**2])
+        if covariances is None or self.observation_scale == 0:
+            return np.broadcast_to(fixed, (count, 2, 2)).copy()
+        return self.observation_scale * np.asarray(covariances, dtype=float).reshape(count, 2, 2) + fixed
 
     @property
     def odometry_noise(self) -> OdometryNoise:
@@ -239,12 +250,6 @@ class FastSLAM:
         bearing = wrap_angle(np.arctan2(dy, dx) - self.poses[:, None, 2])
         return rho, bearing, (dx / rho, dy / rho, -dy / q, dx / q)
 
-    def _noise(self, covariances: np.ndarray | None, count: int) -> np.ndarray:
-        """Observation noise R (K, 2, 2): the fixed sigmaR/sigmaB plus each observation's own."""
-        fixed = np.diag([self.params.sigmaR**2, self.params.sigmaB**2])
-        if covariances is None or not self.params.use_observation_covariance:
-            return np.broadcast_to(fixed, (count, 2, 2)).copy()
-        return np.asarray(covariances, dtype=float) + fixed
 
     # -- update -------------------------------------------------------------------------------
     def update(self, observations: np.ndarray, covariances: np.ndarray | None = None,
@@ -269,7 +274,7 @@ class FastSLAM:
             raise ValueError("association='known' needs the observations' ids")
         while count and (~self.exists).sum(axis=1).min() < count:  # room for every observation to start a landmark
             self._grow()
-        noise = self._noise(covariances, count)
+        noise = self.params.observation_noise(covariances, count)
         m = self._used_slots()
         # 1. Association, under the model the weights use.
         prior = self._model(observations, noise, m, self.proposal.carries_pose_uncertainty)

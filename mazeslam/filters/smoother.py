@@ -209,7 +209,7 @@ def build_problem(course_log: CourseLog, observations: list[np.ndarray], covaria
         covariances: per scan record, (K_s, 2, 2) their covariances (the corner extractor's).
         ids: per scan record, (K_s,) the landmark identity of each observation; -1: left out.
         params: the noise terms sigmaX, sigmaTH, sigmaTH_drive, sigmaR, sigmaB and
-            use_observation_covariance, as FastSLAM uses them.
+            observation_scale, as FastSLAM uses them (``FastSLAMParams.observation_noise``).
         start_pose: (3,) the fixed start pose, world frame.
     The solver starts from dead reckoning, and each landmark where its first observation puts it.
     """
@@ -231,7 +231,7 @@ def build_problem(course_log: CourseLog, observations: list[np.ndarray], covaria
     used = [np.asarray(i) >= 0 for i in ids]
     z = np.concatenate([np.asarray(o, dtype=float).reshape(-1, 2)[u] for o, u in zip(observations, used)])
     noise = np.concatenate([np.asarray(c, dtype=float).reshape(-1, 2, 2)[u] for c, u in zip(covariances, used)])
-    noise = observation_noise(noise, params)
+    noise = params.observation_noise(noise, len(noise))
     seen_from = np.concatenate([np.full(u.sum(), s) for s, u in enumerate(used)]).astype(int)
     named = np.concatenate([np.asarray(i)[u] for i, u in zip(ids, used)]).astype(int)
     landmark_ids, which = np.unique(named, return_inverse=True)
@@ -241,12 +241,6 @@ def build_problem(course_log: CourseLog, observations: list[np.ndarray], covaria
     landmarks = np.array([transform_points(poses[seen_from[k]], polar_to_cartesian(*z[k])) for k in first])
     return SmoothingProblem(start_pose, scan_records, odometry, odometry_covariances, z, noise, seen_from, which,
                             landmark_ids, poses, landmarks.reshape(-1, 2))
-
-
-def observation_noise(covariances: np.ndarray, params: FastSLAMParams) -> np.ndarray:
-    """FastSLAM's observation noise (K, 2, 2): ``diag(sigmaR^2, sigmaB^2)`` plus each observation's own
-    covariance ``covariances`` (K, 2, 2) when ``params.use_observation_covariance``."""
-    return np.where(params.use_observation_covariance, covariances, 0.0) + np.diag([params.sigmaR**2, params.sigmaB**2])
 
 
 # -- the solver -----------------------------------------------------------------------------------
