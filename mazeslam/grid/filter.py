@@ -1,0 +1,310 @@
+"""Grid-map Rao-Blackwellised particle filter (Grisetti, Stachniss and Burgard, "Improved techniques
+for grid mapping with Rao-Blackwellized particle filters", IEEE T-RO 2007: the method of gmapping).
+
+Each particle is a robot pose, a log weight and its own occupancy grid (``TiledGrid``, tiles shared
+copy-on-write with its relatives). A scan is processed once the robot has moved ``linear_update``
+metres or turned ``angular_update`` radians since the last processed scan, with the motion
+accumulated in between (``u``). For each particle, at its previous pose ``x'``:
+
+1. predict ``x^ = x' (+) u`` and match the scan against the particle's own map from there
+   (``refine_pose``: likelihood field times the motion prior ``N(x^, Q(u))``), giving the mode ``x*``;
+2. score ``K = 27`` poses ``x_j`` on a 3 x 3 x 3 stencil around ``x*``:
+   ``tau_j = p(z | m, x_j) p(x_j | x', u)``; the proposal is the Gaussian with their
+   ``tau``-weighted mean and covariance, and the new pose is drawn from it;
+3. the weight is multiplied by the normaliser ``eta = sum_j tau_j``.
+
+When the match fails (too few end points near occupied cells at ``x*``) the stencil is centred on
+``x^`` for the weight and the pose is drawn from the motion model. Then the scan is ray-traced into
+the particle's map at its new pose. Weights are tempered as gmapping does (log weights divided by
+``observation_gain`` times the particle count) and the particles are resampled (systematic) only
+when the effective sample size falls below ``resample_threshold`` times their count.
+
+The motion ``u`` between scans comes from the project's laser odometry (``laser_odometry``, scan to
+scan ICP with the wheel odometry as prior), or from the log's odometry records alone.
+"""
+
+from __future__ import annotations
+
+import itertools
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+from scipy.special import logsumexp
+from tqdm.auto import tqdm
+
+from mazeslam.beams import BeamGeometry
+from mazeslam.config import require
+from mazeslam.filters.motion import OdometryNoise, predict_relative
+from mazeslam.filters.resampling import effective_sample_size, normalized_weights, systematic_resample
+from mazeslam.filters.scan_matching import ScanMatchParams, laser_odometry, wheel_motion
+from mazeslam.geometry import compose, transform_points, wrap_angle
+from mazeslam.grid.matching import LikelihoodField, MatchParams, match_points, refine_pose
+from mazeslam.grid.occupancy import GridParams, TiledGrid, integrate_scan, scan_rays
+from mazeslam.log import CourseLog
+
+
+@dataclass(frozen=True)
+class GridSlamParams:
+    """Settings of the grid filter.
+
+    Attributes:
+        particles: particle count.
+        seed: seed of the filter's random draws.
+        grid: the occupancy grid (``GridParams``); match: the matcher (``MatchParams``).
+        motion_noise: noise of the motion ``u`` between processed scans (``OdometryNoise``:
+            sigmaX m/sqrt(m), sigmaTH rad/sqrt(rad), sigmaTH_drive rad/sqrt(m)), plus
+            ``motion_floor`` (m and rad) on each axis. Its x and y variances are equal, so it is the
+            same in the robot and the world frame.
+        linear_update, angular_update: a scan is processed after this much travel (m) or turning
+            (rad) since the last processed scan; others only carry the motion on.
+        kernel_step: spacing (x m, y m, theta rad) of the 3 x 3 x 3 stencil around the match.
+        resample_threshold: resample when the effective sample size is below this fraction.
+        observation_gain: log weights are divided by this times the particle count (gmapping's
+            obsSigmaGain), as the beams of a scan are far from independent.
+        window_margin: the map window read around a scan's reach, m (bounds the match's shift).
+        laser_odometry: the laser odometry giving the motion, or None for the log's odometry records.
+    """
+
+    particles: int = 30
+    seed: int = 0
+    grid: GridParams = field(default_factory=GridParams)
+    match: MatchParams = field(default_factory=MatchParams)
+    motion_noise: OdometryNoise = field(default_factory=lambda: OdometryNoise(0.05, 0.05, 0.02))
+    motion_floor: float = 0.01
+    linear_update: float = 0.5
+    angular_update: float = 0.25
+    kernel_step: tuple = (0.02, 0.02, 0.01)
+    resample_threshold: float = 0.5
+    observation_gain: float = 3.0
+    window_margin: float = 1.5
+    laser_odometry: ScanMatchParams | None = field(default_factory=lambda: ScanMatchParams(enabled=True))
+
+    def __post_init__(self):
+        object.__setattr__(self, "kernel_step", tuple(self.kernel_step))
+        require(self.particles >= 1, "particles must be at least 1")
+        require(self.linear_update >= 0 and self.angular_update >= 0, "update thresholds must be >= 0")
+        require(len(self.kernel_step) == 3 and all(s > 0 for s in self.kernel_step), "kernel_step: 3 positive steps")
+        require(0 <= self.resample_threshold <= 1, "resample_threshold must be a fraction")
+        require(self.observation_gain > 0 and self.motion_floor > 0, "observation_gain and motion_floor must be positive")
+
+    def motion_covariance(self, motion: np.ndarray) -> np.ndarray:
+        """Covariance (3, 3) of a motion ``(dx, dy, dtheta)`` between processed scans."""
+        return self.motion_noise.relative_covariance(motion) + self.motion_floor**2 * np.eye(3)
+
+
+#: The stencil of the proposal: every combination of -1, 0, +1 steps in x, y and theta, (27, 3).
+STENCIL = np.array(list(itertools.product((-1.0, 0.0, 1.0), repeat=3)))
+
+
+@dataclass(frozen=True)
+class ScanSensor:
+    """How a log's scans are turned into points: bearings (N,) rad and sensor mount (2,), robot frame."""
+
+    bearings: np.ndarray
+    mount: np.ndarray
+
+    @classmethod
+    def of(cls, geometry: BeamGeometry, beams: int) -> ScanSensor:
+        return cls(geometry.bearings(beams), np.array([geometry.mount_x, geometry.mount_y]))
+
+
+class GridSlam:
+    """The particle cloud: poses (P, 3) world frame, log weights (P,), maps (P ``TiledGrid``)."""
+
+    def __init__(self, params: GridSlamParams, start_pose, sensor: ScanSensor):
+        self.params, self.sensor = params, sensor
+        count = params.particles
+        self.poses = np.tile(np.asarray(start_pose, dtype=float), (count, 1))
+        self.log_weights = np.zeros(count)
+        self.maps = [TiledGrid(params.grid) for _ in range(count)]
+        self.rng = np.random.default_rng(params.seed)
+        self.resamplings = 0
+
+    @property
+    def weights(self) -> np.ndarray:
+        return normalized_weights(self.log_weights)
+
+    def best_particle(self) -> int:
+        return int(np.argmax(self.log_weights))
+
+    def process(self, ranges: np.ndarray, motion: np.ndarray) -> tuple[float, float, np.ndarray | None]:
+        """Move every particle by ``motion`` (3,) (robot frame, since the last processed scan) with
+        the improved proposal, weigh it, add the scan (``ranges`` (N,) m) to its map and resample
+        if needed. Returns the share of particles whose match was accepted, the effective sample
+        size before resampling and the resampling's indexes (None without resampling)."""
+        rays = scan_rays(ranges, self.sensor.bearings, self.sensor.mount, self.params.grid)
+        points = match_points(ranges, self.sensor.bearings, self.sensor.mount, self.params.match)
+        covariance = self.params.motion_covariance(motion)
+        information = np.linalg.inv(covariance)
+        log_etas, matched = np.zeros(len(self.poses)), 0
+        for index, grid in enumerate(self.maps):
+            predicted = compose(self.poses[index], motion)
+            reach = np.vstack([transform_points(predicted, rays.reach), predicted[:2]])
+            window = grid.window(*grid.tile_range(reach, self.params.window_margin))
+            if grid.tiles and len(points) >= 3:
+                field = LikelihoodField(window, self.params.match)
+                if field.has_occupied:
+                    pose, log_etas[index], accepted = self._propose(field, points, predicted, information)
+                    if not accepted:
+                        pose = predict_relative(self.poses[index][None], motion, covariance, self.rng)[0]
+                    matched += accepted
+                    self.poses[index] = pose
+                else:
+                    self.poses[index] = predicted
+            else:
+                self.poses[index] = predicted
+            grid.store(window, integrate_scan(window, rays, self.poses[index], self.params.grid))
+        self.log_weights += (log_etas - log_etas.max()) / (self.params.observation_gain * len(self.poses))
+        return matched / len(self.poses), effective_sample_size(self.weights), self._resample_if_needed()
+
+    def _propose(self, field: LikelihoodField, points: np.ndarray, predicted: np.ndarray,
+                 information: np.ndarray) -> tuple[np.ndarray, float, bool]:
+        """The improved proposal of one particle: the drawn pose (3,), ``log eta`` and whether the
+        match was accepted (if not, the pose is the stencil's centre and the caller draws one)."""
+        match = self.params.match
+        mode = refine_pose(field, points, predicted, information, match)
+        accepted = field.overlap(mode, points, match) >= match.min_overlap
+        centre = mode if accepted else predicted
+        stencil = centre + STENCIL * self.params.kernel_step
+        offsets = stencil - predicted
+        offsets[:, 2] = wrap_angle(offsets[:, 2])
+        log_tau = field.log_likelihood(stencil, points, match) - 0.5 * np.einsum(
+            "ki,ij,kj->k", offsets, information, offsets)
+        log_eta = float(logsumexp(log_tau))
+        if not accepted:
+            return centre, log_eta, False
+        weights = np.exp(log_tau - log_eta)
+        spread = STENCIL * self.params.kernel_step
+        mean = weights @ spread
+        covariance = (spread - mean).T @ ((spread - mean) * weights[:, None]) + 1e-10 * np.eye(3)
+        pose = centre + self.rng.multivariate_normal(mean, covariance, method="eigh")
+        pose[2] = wrap_angle(pose[2])
+        return pose, log_eta, True
+
+    def _resample_if_needed(self) -> np.ndarray | None:
+        """Systematic resampling when the effective sample size is low: the kept indexes, or None."""
+        weights = self.weights
+        if effective_sample_size(weights) >= self.params.resample_threshold * len(weights):
+            return None
+        indexes = systematic_resample(weights, self.rng)
+        self.poses = self.poses[indexes]
+        self.maps = [self.maps[index].copy() for index in indexes]
+        self.log_weights = np.zeros(len(indexes))
+        self.resamplings += 1
+        return indexes
+
+    def cloud(self, pending: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The particles moved on by ``pending`` (3,), the motion not processed yet: poses (P, 3),
+        their weighted mean (3,) and covariance (3, 3) (headings around the mean's)."""
+        poses = compose(self.poses, pending)
+        weights = self.weights
+        heading = np.angle(weights @ np.exp(1j * poses[:, 2]))
+        deviation = poses - np.r_[weights @ poses[:, :2], heading]
+        deviation[:, 2] = wrap_angle(deviation[:, 2])
+        mean = np.r_[weights @ poses[:, :2], heading]
+        return poses, mean, (deviation * weights[:, None]).T @ deviation
+
+
+@dataclass
+class GridSlamResult:
+    """A grid filter run over a log.
+
+    Attributes:
+        scan_records: (S,) record numbers of the log's scans; times (S,) their times, s.
+        best_poses: (S, 3) the path of the final best particle at every scan (consistent with
+            ``grid``); mean_poses (S, 3) the cloud's weighted mean after each scan and covariances
+            (S, 3, 3) its spread. World frame, m and rad.
+        processed: (S,) the scan was matched and mapped (else the robot had not moved enough).
+        matched: (S,) share of the particles whose match was accepted (NaN where not processed).
+        neff: (S,) effective sample size after the scan's weighting, before any resampling.
+        resampled: (S,) the particles were resampled after the scan.
+        grid: the final best particle's map.
+        seconds: (S,) wall-clock seconds of each scan; motion_seconds the laser odometry's.
+        particles: the final cloud (for inspection).
+    """
+
+    scan_records: np.ndarray
+    times: np.ndarray
+    best_poses: np.ndarray
+    mean_poses: np.ndarray
+    covariances: np.ndarray
+    processed: np.ndarray
+    matched: np.ndarray
+    neff: np.ndarray
+    resampled: np.ndarray
+    grid: TiledGrid
+    seconds: np.ndarray
+    motion_seconds: float
+    particles: GridSlam
+
+    @property
+    def resamplings(self) -> int:
+        return int(self.resampled.sum())
+
+    @property
+    def total_seconds(self) -> float:
+        return float(self.seconds.sum() + self.motion_seconds)
+
+    def record_trajectory(self, course_log: CourseLog, start_pose, which: str = "best") -> tuple[np.ndarray, np.ndarray]:
+        """Poses (R, 3) and covariances (R, 3, 3) at every record of ``course_log``, as
+        ``sidecars.write_trajectory`` takes them: a record keeps the pose of the last scan at or
+        before it (``start_pose`` and zero covariance before the first). ``which``: "best" or "mean"."""
+        scan_poses = {"best": self.best_poses, "mean": self.mean_poses}[which]
+        latest = np.searchsorted(self.scan_records, np.arange(len(course_log)), side="right") - 1
+        poses = np.where(latest[:, None] >= 0, scan_poses[np.maximum(latest, 0)], np.asarray(start_pose, float))
+        covariances = np.where(latest[:, None, None] >= 0, self.covariances[np.maximum(latest, 0)], 0.0)
+        return poses, covariances
+
+
+def scan_motions(course_log: CourseLog, geometry: BeamGeometry, params: GridSlamParams) -> np.ndarray:
+    """The motion (S, 3) before each scan (robot frame of the previous scan; the first from the
+    start pose): the laser odometry's, or the chained odometry records without it."""
+    if params.laser_odometry is not None:
+        return laser_odometry(course_log, geometry, params.laser_odometry).increments
+    records = np.flatnonzero(course_log.is_scan)
+    previous = np.r_[-1, records[:-1]]
+    return np.array([wheel_motion(course_log, first, last)[0] for first, last in zip(previous, records)]).reshape(-1, 3)
+
+
+def run_grid_slam(course_log: CourseLog, geometry: BeamGeometry, start_pose, params: GridSlamParams | None = None,
+                  progress: bool = False) -> GridSlamResult:
+    """The grid filter over every scan of ``course_log`` (see the module docstring)."""
+    params = params or GridSlamParams()
+    began = time.perf_counter()
+    motions = scan_motions(course_log, geometry, params)
+    motion_seconds = time.perf_counter() - began
+    records = np.flatnonzero(course_log.is_scan)
+    count, particles = len(records), params.particles
+    slam = GridSlam(params, start_pose, ScanSensor.of(geometry, course_log.width))
+    node_poses, node_parents = np.empty((count, particles, 3)), np.empty((count, particles), dtype=int)
+    mean_poses, covariances = np.empty((count, 3)), np.empty((count, 3, 3))
+    processed, resampled = np.zeros(count, bool), np.zeros(count, bool)
+    matched, neff, seconds = np.full(count, np.nan), np.full(count, float(particles)), np.empty(count)
+    pending = np.zeros(3)
+    for index in tqdm(range(count), desc="grid SLAM", unit="scan", disable=not progress):
+        started = time.perf_counter()
+        pending = compose(pending, motions[index])
+        parents = np.arange(particles)
+        if index == 0 or np.hypot(*pending[:2]) >= params.linear_update or abs(pending[2]) >= params.angular_update:
+            matched[index], neff[index], indexes = slam.process(course_log.values[records[index]], pending)
+            processed[index], pending = True, np.zeros(3)
+            if indexes is not None:
+                parents, resampled[index] = indexes, True
+        node_poses[index], mean_poses[index], covariances[index] = slam.cloud(pending)
+        node_parents[index] = parents
+        seconds[index] = time.perf_counter() - started
+    best = slam.best_particle()
+    return GridSlamResult(records, course_log.times[records], _backtrack(node_poses, node_parents, best), mean_poses,
+                          covariances, processed, matched, neff, resampled, slam.maps[best], seconds, motion_seconds,
+                          slam)
+
+
+def _backtrack(node_poses: np.ndarray, node_parents: np.ndarray, particle: int) -> np.ndarray:
+    """The path (S, 3) of ``particle`` through the ancestry: ``node_poses`` (S, P, 3) holds every
+    particle's pose at each scan, ``node_parents`` (S, P) the index at the scan before of its ancestor."""
+    path = np.empty((len(node_poses), 3))
+    for index in range(len(node_poses) - 1, -1, -1):
+        path[index] = node_poses[index, particle]
+        particle = node_parents[index, particle]
+    return path

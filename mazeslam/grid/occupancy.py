@@ -1,0 +1,187 @@
+"""Occupancy grid in log-odds, tiled so that particles share what they have in common.
+
+World frame, metres. Cell ``(i, j)`` covers ``[i r, (i + 1) r) x [j r, (j + 1) r)`` for the
+resolution ``r``; arrays of cells are indexed ``[i, j]`` (x first). Cells are grouped in square
+tiles of ``tile_size`` cells; tile ``(a, b)`` holds cells ``a T .. a T + T - 1`` by ``b T .. b T + T - 1``.
+
+Tiles are immutable: a write replaces the tiles it changes by new arrays, so ``copy`` (what a
+resampling does for each surviving particle) copies only the dictionary of tile references, never
+a cell. Particles that descend from one ancestor share every tile neither has written since, and
+memory grows with the tiles they changed, not with the particles times the map.
+
+A log-odds value ``l`` is the probability ``1 / (1 + exp(-l))`` that a cell is occupied: 0 is
+unknown, positive occupied, negative free.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from mazeslam.config import require
+from mazeslam.geometry import transform_points
+
+TileKey = tuple[int, int]
+
+
+@dataclass(frozen=True)
+class GridParams:
+    """Cells and how one scan changes them.
+
+    Attributes:
+        resolution: cell size, m.
+        tile_size: cells along a tile's side.
+        hit: log-odds added to the cell a beam ends in.
+        miss: log-odds added to a cell a beam crosses (negative).
+        clamp: log-odds stay within [-clamp, clamp], so that a map can change its mind.
+        max_range: beams update the map up to this range, m; a longer beam (or a max-range return)
+            clears the cells up to it and marks nothing occupied.
+        trace_step: distance between the samples along a beam that mark cells free, in cells.
+    """
+
+    resolution: float = 0.05
+    tile_size: int = 64
+    hit: float = 0.85
+    miss: float = -0.4
+    clamp: float = 5.0
+    max_range: float = 20.0
+    trace_step: float = 0.8
+
+    def __post_init__(self):
+        require(self.resolution > 0 and self.max_range > 0, "resolution and max_range must be positive (m)")
+        require(self.tile_size >= 4, "tile_size must be at least 4 cells")
+        require(self.hit > 0 > self.miss and self.clamp > 0, "need hit > 0 > miss and clamp > 0 (log-odds)")
+        require(0 < self.trace_step <= 1, "trace_step must be in (0, 1] cells")
+
+
+class TiledGrid:
+    """A log-odds grid stored as immutable tiles (see the module docstring).
+
+    Attributes:
+        tiles: tile key ``(a, b)`` -> float32 array (T, T) of log-odds; absent tiles are unknown (0).
+    """
+
+    def __init__(self, params: GridParams, tiles: dict[TileKey, np.ndarray] | None = None):
+        self.params = params
+        self.tiles = {} if tiles is None else tiles
+
+    def copy(self) -> TiledGrid:
+        """A grid sharing every tile with this one: copies references only."""
+        return TiledGrid(self.params, dict(self.tiles))
+
+    @property
+    def tile_metres(self) -> float:
+        return self.params.tile_size * self.params.resolution
+
+    def tile_range(self, points: np.ndarray, margin: float) -> tuple[np.ndarray, np.ndarray]:
+        """The tiles (lower (2,), upper (2,), upper exclusive) covering ``points`` (N, 2) (world,
+        m) widened by ``margin`` metres."""
+        lower = np.floor((points.min(axis=0) - margin) / self.tile_metres).astype(int)
+        upper = np.floor((points.max(axis=0) + margin) / self.tile_metres).astype(int) + 1
+        return lower, upper
+
+    def window(self, lower: np.ndarray, upper: np.ndarray) -> Window:
+        """The cells of tiles ``lower`` .. ``upper`` (exclusive) as one dense array to read and edit."""
+        size = self.params.tile_size
+        values = np.zeros(((upper[0] - lower[0]) * size, (upper[1] - lower[1]) * size), dtype=np.float32)
+        for (a, b), tile in self.tiles.items():
+            if lower[0] <= a < upper[0] and lower[1] <= b < upper[1]:
+                i, j = (a - lower[0]) * size, (b - lower[1]) * size
+                values[i:i + size, j:j + size] = tile
+        return Window(values, lower * self.tile_metres, self.params.resolution, lower)
+
+    def store(self, window: Window, changed: np.ndarray) -> None:
+        """Replace the tiles of ``window`` whose cells ``changed`` (bool, the window's shape) by
+        new tiles copied from it; other tiles keep their (possibly shared) arrays."""
+        size = self.params.tile_size
+        tiles_x, tiles_y = changed.shape[0] // size, changed.shape[1] // size
+        touched = changed.reshape(tiles_x, size, tiles_y, size).any(axis=(1, 3))
+        for a, b in zip(*np.nonzero(touched)):
+            block = window.values[a * size:(a + 1) * size, b * size:(b + 1) * size]
+            self.tiles[(int(window.lower_tile[0] + a), int(window.lower_tile[1] + b))] = block.copy()
+
+    def dense(self) -> tuple[np.ndarray, np.ndarray]:
+        """The whole map as one array (X, Y) of log-odds and the world position (2,) of its cell
+        (0, 0)'s lower corner, m. An empty grid gives an empty array at the origin."""
+        if not self.tiles:
+            return np.zeros((0, 0), dtype=np.float32), np.zeros(2)
+        keys = np.array(list(self.tiles))
+        window = self.window(keys.min(axis=0), keys.max(axis=0) + 1)
+        return window.values, window.origin
+
+
+@dataclass
+class Window:
+    """A dense block of a grid's cells.
+
+    Attributes:
+        values: (X, Y) float32 log-odds, indexed [i, j] with i along world x.
+        origin: (2,) world position of cell [0, 0]'s lower corner, m.
+        resolution: cell size, m.
+        lower_tile: (2,) the tile of cell [0, 0].
+    """
+
+    values: np.ndarray
+    origin: np.ndarray
+    resolution: float
+    lower_tile: np.ndarray
+
+    def cells(self, points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The window cells (i (K,), j (K,)) of those of world ``points`` (N, 2) inside the window."""
+        index = np.floor((points - self.origin) / self.resolution).astype(int)
+        inside = np.all((index >= 0) & (index < self.values.shape), axis=1)
+        return index[inside, 0], index[inside, 1]
+
+
+@dataclass(frozen=True)
+class ScanRays:
+    """One scan as the map update needs it, in the robot frame (the same for every particle).
+
+    Attributes:
+        free: (F, 2) samples along the beams, from the sensor to just before each end, m.
+        hits: (H, 2) the ends of the beams that returned within ``max_range``, m.
+        reach: (B, 2) the farthest point each beam updates (its end or its cut at ``max_range``).
+    """
+
+    free: np.ndarray
+    hits: np.ndarray
+    reach: np.ndarray
+
+
+def scan_rays(ranges: np.ndarray, bearings: np.ndarray, mount: np.ndarray, params: GridParams) -> ScanRays:
+    """The samples of a scan: ``ranges`` (N,) m (0 = no return, left out), ``bearings`` (N,) rad in
+    the robot frame, the sensor at ``mount`` (2,) in the robot frame."""
+    valid = ranges > 0
+    ranges, bearings = ranges[valid], bearings[valid]
+    hit = ranges <= params.max_range
+    length = np.minimum(ranges, params.max_range) - np.where(hit, 0.5 * params.resolution, 0.0)
+    step = params.trace_step * params.resolution
+    counts = np.maximum(np.ceil(length / step).astype(int), 0)
+    beam = np.repeat(np.arange(len(ranges)), counts)
+    distance = (np.arange(counts.sum()) - np.repeat(np.cumsum(counts) - counts, counts)) * step
+    directions = np.column_stack([np.cos(bearings), np.sin(bearings)])
+    free = mount + distance[:, None] * directions[beam]
+    reach = mount + np.minimum(ranges, params.max_range)[:, None] * directions
+    return ScanRays(free, reach[hit], reach)
+
+
+def integrate_scan(window: Window, rays: ScanRays, pose: np.ndarray, params: GridParams) -> np.ndarray:
+    """Add one scan taken at robot ``pose`` (3,) to ``window`` in place: each cell a beam crosses
+    gets ``miss`` once, each cell a beam ends in ``hit`` once (and no miss), clamped. Returns the
+    cells changed (bool, the window's shape). Samples outside the window are left out."""
+    free = np.zeros(window.values.shape, dtype=bool)
+    hits = np.zeros(window.values.shape, dtype=bool)
+    free[window.cells(transform_points(pose, rays.free))] = True
+    hits[window.cells(transform_points(pose, rays.hits))] = True
+    free &= ~hits
+    window.values[free] += params.miss
+    window.values[hits] += params.hit
+    np.clip(window.values, -params.clamp, params.clamp, out=window.values)
+    return free | hits
+
+
+def distinct_tile_bytes(grids: list[TiledGrid]) -> int:
+    """Bytes of cells held by ``grids`` together, each shared tile counted once."""
+    unique = {id(tile): tile.nbytes for grid in grids for tile in grid.tiles.values()}
+    return sum(unique.values())
