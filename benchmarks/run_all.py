@@ -16,6 +16,7 @@ import bench_fastslam  # noqa: E402
 import bench_laser  # noqa: E402
 import bench_scan_matching  # noqa: E402
 import bench_sweep  # noqa: E402
+import bench_vector_env  # noqa: E402
 import bench_simulation  # noqa: E402
 
 
@@ -27,6 +28,7 @@ def main() -> int:
         tables += [pd.DataFrame([row]) for row in bench_sweep.run()]
         tables += [pd.DataFrame([row]) for row in bench_scan_matching.run()]
         tables.append(pd.DataFrame([bench_env.run()]))
+        tables.append(pd.DataFrame(bench_vector_env.run()))
         for table in tables:
             print(table.set_index("benchmark").to_markdown(floatfmt=".3g"), end="\n\n")
         print(bench_corners.quality(Path(folder)).to_markdown(floatfmt=".4f"))

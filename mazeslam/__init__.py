@@ -4,7 +4,8 @@ The stages (see docs/architecture.md): simulate a maze run or record a real one 
 truth and map sidecars) -> corners -> FastSLAM -> metrics. Start with ``mazeslam.simulate`` and
 ``mazeslam.log.read``.
 
-Importing the package registers the Gymnasium environment ``mazeslam/Maze-v0`` and loads nothing
+Importing the package registers the Gymnasium environment ``mazeslam/Maze-v0`` (its vector entry
+point: ``mazeslam.envs.vector_env.MazeVectorEnv``, batched numpy physics) and loads nothing
 heavier than Gymnasium itself (which has no lazy plugin registration since 1.0): the simulator
 (pymunk) loads on first use of ``mazeslam.simulate`` or ``mazeslam.SimulationConfig``, plotting,
 tables and the camera only in the modules that need them.
@@ -16,7 +17,8 @@ __all__ = ["SimulationConfig", "simulate"]
 __version__ = "0.1.0"
 
 if "mazeslam/Maze-v0" not in gymnasium.registry:
-    gymnasium.register(id="mazeslam/Maze-v0", entry_point="mazeslam.envs.maze_env:MazeEnv")
+    gymnasium.register(id="mazeslam/Maze-v0", entry_point="mazeslam.envs.maze_env:MazeEnv",
+                       vector_entry_point="mazeslam.envs.vector_env:MazeVectorEnv")
 
 
 def __getattr__(name: str):

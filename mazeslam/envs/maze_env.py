@@ -11,7 +11,7 @@ from scipy.spatial import cKDTree
 from mazeslam.envs.drive_env import DriveEnv
 from mazeslam.envs.maze import Maze, generate_maze, load_maze
 from mazeslam.envs.simulated_robot import SimulatedRobot
-from mazeslam.envs.simulator import SimulationConfig
+from mazeslam.envs.simulator import MazeParams, SimulationConfig
 from mazeslam.geometry import transform_points
 
 #: Spacing (m) of the points along the walls that count as seen once a beam lands near them.
@@ -74,11 +74,9 @@ class MazeEnv(DriveEnv):
         super().reset(seed=seed)
         options = options or {}
         self.steps, self.time = 0, 0.0
-        self.maze = self._choose_maze(options)
-        start_cell = tuple(options.get("start_cell", (int(self.np_random.integers(self.maze.rows)),
-                                                      int(self.np_random.integers(self.maze.cols)))))
-        heading = float(options.get("start_heading", self.np_random.uniform(-math.pi, math.pi)))
-        self.start_pose = np.array([*self.maze.cell_center(*start_cell), heading])
+        self.maze = choose_maze(options, self.maze_option, self.rows, self.cols, self.loop_fraction,
+                                self.config.maze, self.np_random)
+        self.start_pose = draw_start_pose(self.maze, options, self.np_random)
         self.simulated = SimulatedRobot(self.maze, self.config, start_pose=self.start_pose, rng=self.np_random)
         self.walls, self.laser = self.simulated.walls, self.simulated.laser
         self._samples = _wall_samples(self.walls.surfaces)
@@ -88,17 +86,6 @@ class MazeEnv(DriveEnv):
         self.visited[self.maze.cell_of(*self.start_pose[:2])] = True
         self._see()
         return self._observation(), self._info(collision=False)
-
-    def _choose_maze(self, options: dict) -> Maze:
-        choice = options.get("maze", self.maze_option)
-        if isinstance(choice, Maze):
-            return choice
-        if choice is not None and str(choice) != "random":
-            return load_maze(choice)
-        rows, cols = options.get("rows", self.rows), options.get("cols", self.cols)
-        p = self.config.maze
-        return generate_maze(rows, cols, self.np_random, p.cell_size, p.wall_thickness,
-                             options.get("loop_fraction", self.loop_fraction))
 
     def step(self, action):
         self.simulated.set_wheel_speeds(*self._command(action))
@@ -165,6 +152,28 @@ class MazeEnv(DriveEnv):
 
             plt.close(self._figure)
             self._figure = None
+
+
+def choose_maze(options: dict, default: Maze | str | None, rows: int, cols: int, loop_fraction: float,
+                params: MazeParams, rng: np.random.Generator) -> Maze:
+    """The maze of a new episode: ``options["maze"]`` or ``default`` (a ``Maze``, a maze file, or
+    None / "random": a random maze of ``options`` or the given rows, cols and loop fraction, with
+    ``params``' cell size and wall thickness, drawn from ``rng``)."""
+    choice = options.get("maze", default)
+    if isinstance(choice, Maze):
+        return choice
+    if choice is not None and str(choice) != "random":
+        return load_maze(choice)
+    return generate_maze(options.get("rows", rows), options.get("cols", cols), rng, params.cell_size,
+                         params.wall_thickness, options.get("loop_fraction", loop_fraction))
+
+
+def draw_start_pose(maze: Maze, options: dict, rng: np.random.Generator) -> np.ndarray:
+    """The start pose (x m, y m, theta rad): the centre of ``options["start_cell"]`` or of a random
+    cell, facing ``options["start_heading"]`` or a random heading, drawn from ``rng``."""
+    start_cell = tuple(options.get("start_cell", (int(rng.integers(maze.rows)), int(rng.integers(maze.cols)))))
+    heading = float(options.get("start_heading", rng.uniform(-math.pi, math.pi)))
+    return np.array([*maze.cell_center(*start_cell), heading])
 
 
 def _wall_samples(surfaces: np.ndarray) -> np.ndarray:

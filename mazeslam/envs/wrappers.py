@@ -1,5 +1,6 @@
-"""Wrappers for ``mazeslam/Maze-v0``: record an episode as a course log (FastSLAM online:
-``mazeslam.online_slam``)."""
+"""Wrappers for ``mazeslam/Maze-v0``: record episodes as course logs, of the single env
+(``RecordCourseLog``) or of every env of its vector env (``RecordVectorCourseLogs``); FastSLAM
+online: ``mazeslam.online_slam``."""
 
 from __future__ import annotations
 
@@ -11,6 +12,37 @@ import numpy as np
 from mazeslam import sidecars
 from mazeslam.config import to_mapping
 from mazeslam.log import LogWriter
+
+
+class EpisodeLog:
+    """One episode's course log: each step an odometry record followed by a scan record with the
+    same timestamp, flushed record by record; ``finish`` closes it and writes the truth and map
+    sidecars."""
+
+    def __init__(self, path: Path, beams: int):
+        self.path = path
+        self._writer = LogWriter(path, beams)
+        self._times, self._poses = [], []
+
+    def write(self, t: float, odometry, scan, pose) -> None:
+        """One step: ``t`` seconds, odometry (distance m, turn rad), scan (N,) m, true pose (3,)."""
+        self._writer.write_odometry(t, float(odometry[0]), float(odometry[1]))
+        self._writer.write_scan(t, np.asarray(scan, dtype=float))
+        self._times += [t, t]
+        self._poses += [pose, pose]
+
+    def finish(self, episode) -> None:
+        """Close the log and write its sidecars; ``episode`` is the env (a ``MazeEnv`` or a
+        ``SubEnv``) whose maze, walls, start pose and config the episode had."""
+        self._writer.close()
+        sidecars.write_truth(sidecars.truth_path(self.path), np.array(self._times), np.array(self._poses))
+        maze = episode.maze
+        sidecars.write_map(sidecars.map_path(self.path), episode.walls.surfaces, episode.walls.corners,
+                           episode.config.laser.sensor_mapping(), corner_convex=episode.walls.corner_convex.tolist(),
+                           start_pose=episode.start_pose.tolist(),
+                           maze={"rows": maze.rows, "cols": maze.cols, "cell_size": maze.cell_size,
+                                 "wall_thickness": maze.wall_thickness, "text": maze.to_text()},
+                           parameters=to_mapping(episode.config), source="mazeslam/Maze-v0 episode")
 
 
 class RecordCourseLog(gym.Wrapper):
@@ -26,49 +58,84 @@ class RecordCourseLog(gym.Wrapper):
         super().__init__(env)
         self.path_template = str(path)
         self.episode = -1
-        self._writer = None
+        self._log: EpisodeLog | None = None
         self.log_paths: list[Path] = []
 
     def reset(self, **kwargs):
         self._finish()
         observation, info = self.env.reset(**kwargs)
         self.episode += 1
-        path = Path(self.path_template.format(episode=self.episode))
-        base = self.env.unwrapped
-        self._writer = LogWriter(path, base.config.laser.beams)
-        self._times, self._poses = [], []
-        self._write(0.0, np.zeros(2), observation["scan"], info["pose"])
-        self.log_paths.append(path)
+        self._log = EpisodeLog(Path(self.path_template.format(episode=self.episode)),
+                               self.env.unwrapped.config.laser.beams)
+        self._log.write(0.0, np.zeros(2), observation["scan"], info["pose"])
+        self.log_paths.append(self._log.path)
         return observation, info
 
     def step(self, action):
         observation, reward, terminated, truncated, info = self.env.step(action)
-        self._write(info["time"], observation["odometry"], observation["scan"], info["pose"])
+        self._log.write(info["time"], observation["odometry"], observation["scan"], info["pose"])
         if terminated or truncated:
             self._finish()
         return observation, reward, terminated, truncated, info
 
-    def _write(self, t: float, odometry, scan, pose) -> None:
-        self._writer.write_odometry(t, float(odometry[0]), float(odometry[1]))
-        self._writer.write_scan(t, np.asarray(scan, dtype=float))
-        self._times += [t, t]
-        self._poses += [pose, pose]
-
     def _finish(self) -> None:
-        """Close the episode's log and write its sidecars."""
-        if self._writer is None:
-            return
-        self._writer.close()
-        self._writer = None
-        base = self.env.unwrapped
-        path = self.log_paths[-1]
-        sidecars.write_truth(sidecars.truth_path(path), np.array(self._times), np.array(self._poses))
-        sidecars.write_map(sidecars.map_path(path), base.walls.surfaces, base.walls.corners, base.config.laser.sensor_mapping(),
-                           corner_convex=base.walls.corner_convex.tolist(), start_pose=base.start_pose.tolist(),
-                           maze={"rows": base.maze.rows, "cols": base.maze.cols, "cell_size": base.maze.cell_size,
-                                 "wall_thickness": base.maze.wall_thickness, "text": base.maze.to_text()},
-                           parameters=to_mapping(base.config), source="mazeslam/Maze-v0 episode")
+        if self._log is not None:
+            self._log.finish(self.env.unwrapped)
+            self._log = None
 
     def close(self):
         self._finish()
         super().close()
+
+
+class RecordVectorCourseLogs(gym.vector.VectorWrapper):
+    """``RecordCourseLog`` for each env of a ``MazeVectorEnv``: every episode of env i becomes a
+    course log with sidecars. ``path`` may hold ``{env}`` and ``{episode}`` (that env's episode
+    number, 0, 1, ...). Follows the vector env's next-step autoreset: a step after an episode's
+    end starts the env's next log."""
+
+    def __init__(self, env: gym.vector.VectorEnv, path: str | Path):
+        super().__init__(env)
+        self.path_template = str(path)
+        self.episodes = np.full(self.num_envs, -1)
+        self._logs: list[EpisodeLog | None] = [None] * self.num_envs
+        self._ended = np.zeros(self.num_envs, dtype=bool)
+        self.log_paths: list[Path] = []
+
+    def reset(self, *, seed=None, options=None):
+        observation, info = self.env.reset(seed=seed, options=options)
+        for env in np.flatnonzero(info["_pose"]):
+            self._start(env, observation, info)
+        self._ended[info["_pose"]] = False
+        return observation, info
+
+    def step(self, actions):
+        observation, reward, terminated, truncated, info = self.env.step(actions)
+        for env in range(self.num_envs):
+            if self._ended[env]:
+                self._start(env, observation, info)
+            else:
+                self._logs[env].write(info["time"][env], observation["odometry"][env], observation["scan"][env],
+                                      info["pose"][env])
+        self._ended = terminated | truncated
+        for env in np.flatnonzero(self._ended):
+            self._finish(env)
+        return observation, reward, terminated, truncated, info
+
+    def _start(self, env: int, observation: dict, info: dict) -> None:
+        self._finish(env)
+        self.episodes[env] += 1
+        path = Path(self.path_template.format(env=env, episode=self.episodes[env]))
+        self._logs[env] = EpisodeLog(path, self.env.unwrapped.config.laser.beams)
+        self._logs[env].write(0.0, np.zeros(2), observation["scan"][env], info["pose"][env])
+        self.log_paths.append(path)
+
+    def _finish(self, env: int) -> None:
+        if self._logs[env] is not None:
+            self._logs[env].finish(self.env.unwrapped.sub_env(env))
+            self._logs[env] = None
+
+    def close(self, **kwargs):
+        for env in range(self.num_envs):
+            self._finish(env)
+        super().close(**kwargs)

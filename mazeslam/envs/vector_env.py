@@ -1,0 +1,334 @@
+"""``MazeVectorEnv``: many maze robots stepped together, the vector entry point of ``mazeslam/Maze-v0``.
+
+    envs = gym.make_vec("mazeslam/Maze-v0", num_envs=64, vectorization_mode="vector_entry_point")
+
+Its physics is batched numpy (``mazeslam.envs.batched``), not pymunk: every robot's
+differential-drive kinematics is integrated at once, the discs are pushed out of the walls they
+touch, and one ray cast serves every robot's beams. So an env's episode here differs from the
+pymunk-backed ``MazeEnv``'s with the same seed after the start (same maze and start pose, as both
+draw them alike), but it is the same whether the env runs alone (``num_envs=1``) or in a vector
+of any size: each env draws from its own generator, in an order that depends only on its own
+history.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from functools import cached_property
+
+import numpy as np
+from gymnasium.utils import seeding
+from gymnasium.vector import AutoresetMode, VectorEnv
+from gymnasium.vector.utils import batch_space
+
+from mazeslam.envs.batched import MazeGrids, push_out
+from mazeslam.envs.drive_env import DriveEnv
+from mazeslam.envs.maze import Maze
+from mazeslam.envs.maze_env import WALL_SAMPLE_SPACING, choose_maze, draw_start_pose
+from mazeslam.envs.simulator import SimulationConfig
+from mazeslam.envs.walls import WallGeometry, wall_geometry
+from mazeslam.geometry import wrap_angle
+
+
+class MazeVectorEnv(VectorEnv):
+    """``num_envs`` copies of ``mazeslam/Maze-v0`` stepped together (see ``MazeEnv`` for the
+    actions, observations, rewards, episode end and info, and ``DriveEnv`` for the spaces).
+
+    Spaces are the single env's batched: ``action_space`` ``Box(-1, 1, (num_envs, 2))``,
+    ``observation_space`` ``Dict(scan: (num_envs, N), odometry: (num_envs, 2))``; rewards,
+    terminations and truncations are (num_envs,) arrays; ``info`` holds each single-env key as a
+    (num_envs, ...) array with its ``_key`` mask, as ``SyncVectorEnv`` gives them.
+
+    Autoreset: ``AutoresetMode.NEXT_STEP`` (``metadata["autoreset_mode"]``): the step after an
+    env's episode ends resets it, ignoring its action, and returns its first observation with
+    reward 0. ``reset(seed=s)`` seeds env i with ``s + i`` (a list: one seed per env);
+    ``options`` as the single env's, for every env reset, plus ``reset_mask`` (num_envs,) bool to
+    reset only some. All mazes of a vector share their rows, cols, cell size and wall thickness;
+    changing them takes a reset of every env.
+
+    Physics: per physics step (``config.logger.physics_rate``) the wheels' commanded travel plus
+    slip (``config.odometry``) moves each robot, which is then pushed out of any wall it overlaps
+    (``collision``); the odometry counts the commanded whole encoder steps, as ``WheelEncoders``.
+
+    ``render()`` (``render_mode="rgb_array"``) gives one image of the envs in ``render_envs``,
+    tiled left to right, top to bottom.
+    """
+
+    metadata = {"render_modes": ["rgb_array"], "render_fps": 10, "autoreset_mode": AutoresetMode.NEXT_STEP}
+
+    def __init__(self, num_envs: int = 1, render_mode: str | None = None, config: SimulationConfig | None = None,
+                 rows: int = 4, cols: int = 4, maze: Maze | str | None = None, loop_fraction: float = 0.0,
+                 max_steps: int = 3000, control_period: float = 0.1, action_type: str = "velocity",
+                 wall_reward: float = 10.0, cell_reward: float = 1.0, collision_penalty: float = 0.5,
+                 render_envs: tuple[int, ...] = (0,)):
+        if num_envs < 1:
+            raise ValueError(f"num_envs must be >= 1, got {num_envs}")
+        if render_mode is not None and render_mode not in self.metadata["render_modes"]:
+            raise ValueError(f"render_mode must be one of {self.metadata['render_modes']} or None, got {render_mode!r}")
+        single = DriveEnv(config, max_steps, control_period, action_type)  # checks them; the single spaces
+        self.num_envs, self.render_mode, self.render_envs = num_envs, render_mode, tuple(render_envs)
+        self.config, self.max_steps, self.action_type = single.config, max_steps, action_type
+        self.top_turn_rate = single.top_turn_rate
+        self.single_observation_space, self.single_action_space = single.observation_space, single.action_space
+        self.observation_space = batch_space(self.single_observation_space, num_envs)
+        self.action_space = batch_space(self.single_action_space, num_envs)
+        self.rows, self.cols, self.maze_option, self.loop_fraction = rows, cols, maze, loop_fraction
+        self.wall_reward, self.cell_reward, self.collision_penalty = wall_reward, cell_reward, collision_penalty
+        self.physics_steps = max(1, round(control_period * self.config.logger.physics_rate))
+        laser, robot = self.config.laser, self.config.robot
+        self.bearings = laser.geometry.bearings(laser.beams)  # (N,) robot frame, rad
+        self.metres_per_step = 2 * np.pi * robot.wheel_radius / robot.encoder_steps_per_revolution
+        self.generators: list[np.random.Generator | None] = [None] * num_envs
+        self.mazes: list[Maze | None] = [None] * num_envs
+        self.grids: MazeGrids | None = None
+        self.poses = np.zeros((num_envs, 3))  # true poses (x m, y m, theta rad)
+        self.start_poses = np.zeros((num_envs, 3))
+        self.steps = np.zeros(num_envs, dtype=np.int64)  # steps into each episode
+        self.time = np.zeros(num_envs)  # simulated seconds into each episode
+        self.last_scan = np.zeros((num_envs, laser.beams), dtype=np.float32)
+        self._commanded = np.zeros((num_envs, 2))  # commanded wheel travel since the start, m
+        self._reported = np.zeros((num_envs, 2), dtype=np.int64)  # encoder steps already reported
+        self._collision = np.zeros(num_envs, dtype=bool)
+        self._autoreset = np.zeros(num_envs, dtype=bool)
+
+    # -- episode ------------------------------------------------------------------------------
+    def reset(self, *, seed: int | list[int | None] | None = None, options: dict | None = None):
+        options = dict(options or {})
+        mask = options.pop("reset_mask", None)
+        envs = np.arange(self.num_envs) if mask is None else np.flatnonzero(_check_mask(mask, self.num_envs))
+        seeds = _env_seeds(seed, self.num_envs)
+        self._reset_envs(envs, [seeds[e] for e in envs], options)
+        _, scan_noise, dropouts = self._draw(envs)
+        self._observe(envs, scan_noise, dropouts)
+        return self._observation(np.zeros((self.num_envs, 2))), self._infos(envs)
+
+    def step(self, actions):
+        actions = np.clip(np.asarray(actions, dtype=float).reshape(self.num_envs, 2), -1.0, 1.0)
+        resetting = self._autoreset.copy()
+        if resetting.any():
+            self._reset_envs(np.flatnonzero(resetting), [None] * int(resetting.sum()), {})
+        moving = ~resetting
+        everyone = np.arange(self.num_envs)
+        slip, scan_noise, dropouts = self._draw(everyone)
+        self._collision = self._drive(self._wheel_speeds(actions) * moving[:, None], slip)
+        self.steps += moving
+        self.time += moving * self.physics_steps / self.config.logger.physics_rate
+        odometry = self._read_odometry()
+        newly_seen, new_cell = self._observe(everyone, scan_noise, dropouts)
+        rewards = (self.wall_reward * newly_seen * WALL_SAMPLE_SPACING + self.cell_reward * new_cell
+                   - self.collision_penalty * self._collision) * moving
+        terminated = self.visited.all(axis=(1, 2)) & moving
+        truncated = (self.steps >= self.max_steps) & moving
+        self._autoreset = terminated | truncated
+        return self._observation(odometry), rewards, terminated, truncated, self._infos(everyone)
+
+    def _reset_envs(self, envs: np.ndarray, seeds: list[int | None], options: dict) -> None:
+        """Draw each env's maze and start pose and clear its episode (no scan yet)."""
+        for env, seed in zip(envs, seeds):
+            if seed is not None or self.generators[env] is None:
+                self.generators[env], _ = seeding.np_random(seed)
+            rng = self.generators[env]
+            self.mazes[env] = choose_maze(options, self.maze_option, self.rows, self.cols, self.loop_fraction,
+                                          self.config.maze, rng)
+            self.start_poses[env] = draw_start_pose(self.mazes[env], options, rng)
+        if len(envs) and (self.grids is None or not all(self.grids.fits(self.mazes[e]) for e in envs)):
+            if len(envs) < self.num_envs:
+                raise ValueError("a maze of another shape needs a reset of every env")
+            self._allocate(self.mazes[0])
+        for env in envs:
+            self.grids.set(env, self.mazes[env])
+            self.wall_bins[env] = self.grids.wall_bins(env, WALL_SAMPLE_SPACING)
+            self.seen[env] = False
+            self.visited[env] = False
+        self.wall_counts[envs] = self.wall_bins[envs].sum(axis=1)
+        self.seen_counts[envs] = 0
+        self.poses[envs] = self.start_poses[envs]
+        self._mark_visited(envs)
+        for array in (self.steps, self.time, self._commanded, self._reported, self._collision, self._autoreset):
+            array[envs] = 0
+
+    def _allocate(self, maze: Maze) -> None:
+        """Grids and per-env bookkeeping for mazes shaped like ``maze``."""
+        self.grids = MazeGrids.like(maze, self.num_envs)
+        bins = self.grids.bin_total(WALL_SAMPLE_SPACING)
+        self.wall_bins = np.zeros((self.num_envs, bins), dtype=bool)  # bins on a wall face
+        self.seen = np.zeros((self.num_envs, bins), dtype=bool)  # wall bins a beam landed in
+        self.wall_counts = np.zeros(self.num_envs, dtype=np.int64)
+        self.seen_counts = np.zeros(self.num_envs, dtype=np.int64)
+        self.visited = np.zeros((self.num_envs, maze.rows, maze.cols), dtype=bool)
+
+    def _draw(self, envs: np.ndarray):
+        """Each listed env's random draws for one step, from its own generator: standard normals
+        for the wheel slip (E, physics steps, 2) and the range noise (E, N), and uniforms for the
+        dropouts (E, N); the other envs' rows are zeros (uniforms: ones, never dropped)."""
+        beams, steps = self.config.laser.beams, self.physics_steps
+        normals = np.zeros((self.num_envs, 2 * steps + beams))
+        uniforms = np.ones((self.num_envs, beams))
+        for env in envs:
+            normals[env] = self.generators[env].standard_normal(normals.shape[1])
+            if self.config.laser.dropout:
+                uniforms[env] = self.generators[env].random(beams)
+        return normals[:, :2 * steps].reshape(-1, steps, 2), normals[:, 2 * steps:], uniforms
+
+    # -- physics ------------------------------------------------------------------------------
+    def _wheel_speeds(self, actions: np.ndarray) -> np.ndarray:
+        """(E, 2) left and right wheel speeds (m/s) for actions (E, 2) in [-1, 1], as ``DriveEnv``."""
+        robot = self.config.robot
+        if self.action_type == "wheels":
+            return actions * robot.max_wheel_speed
+        speed = actions[:, 0] * robot.max_wheel_speed
+        half_difference = 0.5 * actions[:, 1] * self.top_turn_rate * robot.wheelbase
+        wheels = np.column_stack([speed - half_difference, speed + half_difference])
+        fastest = np.abs(wheels).max(axis=1, keepdims=True)
+        return wheels * np.minimum(1.0, robot.max_wheel_speed / np.maximum(fastest, 1e-12))
+
+    def _drive(self, speeds: np.ndarray, slip: np.ndarray) -> np.ndarray:
+        """Drive every robot at wheel ``speeds`` (E, 2) (m/s) for one step of physics steps, with
+        ``slip`` (E, steps, 2) standard normals; return (E,) whether each touched a wall."""
+        robot, odometry = self.config.robot, self.config.odometry
+        dt = 1.0 / self.config.logger.physics_rate
+        commanded = speeds * dt
+        scale = 1.0 + np.array([odometry.left_scale_error, odometry.right_scale_error])
+        spread = odometry.slip_std * np.sqrt(np.abs(commanded))
+        x, y, theta = (self.poses[:, k].copy() for k in range(3))
+        touched = np.zeros(self.num_envs, dtype=bool)
+        reach = robot.body_radius + 2 * robot.max_wheel_speed * dt * slip.shape[1]  # with room for slip
+        boxes = self.grids.boxes_near(x, y, reach)
+        for step in range(slip.shape[1]):
+            self._commanded += commanded
+            left, right = (commanded * scale + slip[:, step] * spread).T  # true ground travel, m
+            turn = (right - left) / robot.wheelbase
+            heading = theta + 0.5 * turn  # midpoint heading over the physics step
+            x += 0.5 * (left + right) * np.cos(heading)
+            y += 0.5 * (left + right) * np.sin(heading)
+            theta += turn
+            touched |= push_out(x, y, robot.body_radius, boxes)
+        self.poses = np.column_stack([x, y, wrap_angle(theta)])
+        return touched
+
+    def _read_odometry(self) -> np.ndarray:
+        """(E, 2) odometry since the previous read: distance (m), heading change (rad)."""
+        steps = np.floor(self._commanded / self.metres_per_step + 1e-9).astype(np.int64)
+        left, right = ((steps - self._reported) * self.metres_per_step).T
+        self._reported = steps
+        return np.column_stack([0.5 * (left + right), (right - left) / self.config.robot.wheelbase])
+
+    # -- sensing ------------------------------------------------------------------------------
+    def _observe(self, envs: np.ndarray, noise: np.ndarray, uniforms: np.ndarray):
+        """Scan from the listed envs' poses (into ``last_scan``), count the wall bins their noise-free
+        beams land on and the cells they stand in; return (E,) newly seen bins and (E,) new cells."""
+        laser = self.config.laser
+        x, y, heading = self.poses[envs].T
+        mount_x, mount_y = laser.geometry.mount_x, laser.geometry.mount_y
+        sensor_x = x + mount_x * np.cos(heading) - mount_y * np.sin(heading)
+        sensor_y = y + mount_x * np.sin(heading) + mount_y * np.cos(heading)
+        ranges, faces, along = self.grids.cast(envs, sensor_x, sensor_y, heading, self.bearings, laser.max_range)
+        noisy = ranges + noise[envs] * laser.range_noise_std
+        valid = np.isfinite(ranges) & (noisy >= laser.min_range) & (noisy <= laser.max_range)
+        self.last_scan[envs] = np.where(valid & (uniforms[envs] >= laser.dropout), noisy, 0.0)
+        hit = np.isfinite(ranges)
+        bins = (np.broadcast_to(envs[:, None], hit.shape)[hit] * self.seen.shape[1]
+                + self.grids.face_bins(faces[hit], along[hit], WALL_SAMPLE_SPACING))
+        new = np.unique(bins[self.wall_bins.ravel()[bins] & ~self.seen.ravel()[bins]])
+        self.seen.ravel()[new] = True
+        newly_seen = np.bincount(new // self.seen.shape[1], minlength=self.num_envs)
+        self.seen_counts += newly_seen
+        return newly_seen, self._mark_visited(envs)
+
+    def _mark_visited(self, envs: np.ndarray) -> np.ndarray:
+        """Mark the cells the listed envs' robots stand in; return (E,) whether each was new."""
+        rows, cols = self.visited.shape[1:]
+        size = self.grids.cell_size
+        row = np.clip((self.poses[envs, 1] // size).astype(np.int64), 0, rows - 1)
+        col = np.clip((self.poses[envs, 0] // size).astype(np.int64), 0, cols - 1)
+        new = np.zeros(self.num_envs, dtype=bool)
+        new[envs] = ~self.visited[envs, row, col]
+        self.visited[envs, row, col] = True
+        return new
+
+    def _observation(self, odometry: np.ndarray) -> dict:
+        return {"scan": self.last_scan.copy(), "odometry": odometry.astype(np.float32)}
+
+    def _infos(self, envs: np.ndarray) -> dict:
+        """The single env's info keys as (E, ...) arrays, with ``_key`` masks marking ``envs``."""
+        mask = np.zeros(self.num_envs, dtype=bool)
+        mask[envs] = True
+        values = {"pose": self.poses.copy(), "coverage": self.seen_counts / self.wall_counts,
+                  "visited": self.visited.mean(axis=(1, 2)), "collision": self._collision.copy(),
+                  "time": self.time.copy()}
+        return {**values, **{f"_{key}": mask.copy() for key in values}}
+
+    # -- one env's view, rendering --------------------------------------------------------------
+    def sub_env(self, index: int) -> SubEnv:
+        """Env ``index``'s episode as a single env shows it (for wrappers and drawing)."""
+        seen = self.seen[index] & self.wall_bins[index]
+        return SubEnv(self.mazes[index], self.config, self.start_poses[index].copy(), self.poses[index].copy(),
+                      self.visited[index].copy(), self.last_scan[index].copy(),
+                      self.grids.bin_points(np.flatnonzero(seen), WALL_SAMPLE_SPACING))
+
+    def render(self):
+        if self.render_mode is None:
+            return None
+        from mazeslam.envs.rendering import draw_maze_env
+
+        images = [draw_maze_env(self.sub_env(index)) for index in self.render_envs]
+        columns = int(np.ceil(np.sqrt(len(images))))
+        blank = np.full_like(images[0], 255)
+        images += [blank] * (-len(images) % columns)
+        return np.concatenate([np.concatenate(images[k:k + columns], axis=1)
+                               for k in range(0, len(images), columns)], axis=0)
+
+
+@dataclass
+class SubEnv:
+    """One env of a ``MazeVectorEnv``, with the attributes of a ``MazeEnv`` that the course-log and
+    FastSLAM wrappers and ``draw_maze_env`` read.
+
+    Attributes:
+        seen_points: (S, 2) centres (m) of the wall bins seen so far.
+    """
+
+    maze: Maze
+    config: SimulationConfig
+    start_pose: np.ndarray
+    pose: np.ndarray
+    visited: np.ndarray
+    last_scan: np.ndarray
+    seen_points: np.ndarray
+
+    @cached_property
+    def walls(self) -> WallGeometry:
+        return wall_geometry(self.maze)
+
+    @property
+    def world(self) -> SubEnv:
+        """Itself: ``draw_maze_env`` reads the true pose as ``env.world.pose``."""
+        return self
+
+    @property
+    def _samples(self) -> np.ndarray:  # draw_maze_env draws ``_samples[seen]``
+        return self.seen_points
+
+    @property
+    def seen(self) -> np.ndarray:
+        return np.ones(len(self.seen_points), dtype=bool)
+
+
+def _env_seeds(seed: int | list[int | None] | None, count: int) -> list[int | None]:
+    """One seed per env as ``SyncVectorEnv`` takes them: None, ``seed + i``, or a list."""
+    if seed is None:
+        return [None] * count
+    if isinstance(seed, (int, np.integer)):
+        return [int(seed) + index for index in range(count)]
+    if len(seed) != count:
+        raise ValueError(f"seed lists must have num_envs={count} seeds, got {len(seed)}")
+    return [None if value is None else int(value) for value in seed]
+
+
+def _check_mask(mask, count: int) -> np.ndarray:
+    """``options["reset_mask"]``, checked as ``SyncVectorEnv`` checks it."""
+    if not isinstance(mask, np.ndarray) or mask.dtype != np.bool_ or mask.shape != (count,):
+        raise ValueError(f"options['reset_mask'] must be a bool numpy array of shape ({count},)")
+    if not mask.any():
+        raise ValueError("options['reset_mask'] must reset at least one env")
+    return mask
