@@ -13,8 +13,11 @@ accumulated in between (``u``). For each particle, at its previous pose ``x'``:
    ``tau``-weighted mean and covariance, and the new pose is drawn from it;
 3. the weight is multiplied by the normaliser ``eta = sum_j tau_j``.
 
-When the match fails (too few end points near occupied cells at ``x*``) the stencil is centred on
-``x^`` for the weight and the pose is drawn from the motion model. Then the scan is ray-traced into
+When the refinement ends with too few end points near occupied cells (the laser odometry
+can be wrong by decimetres and tenths of a radian where a scan alone is ambiguous), an exhaustive
+correlative search over a wide window around ``x^`` (``mazeslam.filters.correlative``, against the
+particle's occupied cells) seeds the refinement again. When the match still fails the stencil is
+centred on ``x^`` for the weight and the pose is drawn from the motion model. Then the scan is ray-traced into
 the particle's map at its new pose. Weights are tempered as gmapping does (log weights divided by
 ``observation_gain`` times the particle count) and the particles are resampled (systematic) only
 when the effective sample size falls below ``resample_threshold`` times their count.
@@ -35,6 +38,7 @@ from tqdm.auto import tqdm
 
 from mazeslam.beams import BeamGeometry
 from mazeslam.config import require
+from mazeslam.filters.correlative import CorrelativeParams, LikelihoodGrid, correlative_candidates
 from mazeslam.filters.motion import OdometryNoise, predict_relative
 from mazeslam.filters.resampling import effective_sample_size, normalized_weights, systematic_resample
 from mazeslam.filters.scan_matching import ScanMatchParams, laser_odometry, wheel_motion
@@ -63,6 +67,9 @@ class GridSlamParams:
         observation_gain: log weights are divided by this times the particle count (gmapping's
             obsSigmaGain), as the beams of a scan are far from independent.
         window_margin: the map window read around a scan's reach, m (bounds the match's shift).
+        rescue: the correlative search run when a refinement fails; rescue_sigma (m, rad) its
+            window's standard deviation in position and heading (it reaches ``rescue.window_sigmas``
+            of them) and the refinements' prior from its candidates.
         laser_odometry: the laser odometry giving the motion, or None for the log's odometry records.
     """
 
@@ -70,23 +77,33 @@ class GridSlamParams:
     seed: int = 0
     grid: GridParams = field(default_factory=GridParams)
     match: MatchParams = field(default_factory=MatchParams)
-    motion_noise: OdometryNoise = field(default_factory=lambda: OdometryNoise(0.05, 0.05, 0.02))
-    motion_floor: float = 0.01
+    motion_noise: OdometryNoise = field(default_factory=lambda: OdometryNoise(0.1, 0.1, 0.05))
+    motion_floor: float = 0.05
     linear_update: float = 0.5
     angular_update: float = 0.25
     kernel_step: tuple = (0.02, 0.02, 0.01)
     resample_threshold: float = 0.5
     observation_gain: float = 3.0
     window_margin: float = 1.5
+    rescue: CorrelativeParams = field(default_factory=lambda: CorrelativeParams(
+        resolution=0.1, sigma=0.1, turn_step=2.0, candidates=3, max_points=90))
+    rescue_sigma: tuple = (0.5, 0.35)
     laser_odometry: ScanMatchParams | None = field(default_factory=lambda: ScanMatchParams(enabled=True))
 
     def __post_init__(self):
         object.__setattr__(self, "kernel_step", tuple(self.kernel_step))
+        object.__setattr__(self, "rescue_sigma", tuple(self.rescue_sigma))
         require(self.particles >= 1, "particles must be at least 1")
         require(self.linear_update >= 0 and self.angular_update >= 0, "update thresholds must be >= 0")
         require(len(self.kernel_step) == 3 and all(s > 0 for s in self.kernel_step), "kernel_step: 3 positive steps")
         require(0 <= self.resample_threshold <= 1, "resample_threshold must be a fraction")
         require(self.observation_gain > 0 and self.motion_floor > 0, "observation_gain and motion_floor must be positive")
+
+    @property
+    def rescue_covariance(self) -> np.ndarray:
+        """Covariance (3, 3) of the rescue search's window (see ``rescue_sigma``)."""
+        xy, theta = self.rescue_sigma
+        return np.diag([xy**2, xy**2, theta**2])
 
     def motion_covariance(self, motion: np.ndarray) -> np.ndarray:
         """Covariance (3, 3) of a motion ``(dx, dy, dtheta)`` between processed scans."""
@@ -164,6 +181,8 @@ class GridSlam:
         match was accepted (if not, the pose is the stencil's centre and the caller draws one)."""
         match = self.params.match
         mode = refine_pose(field, points, predicted, information, match)
+        if field.overlap(mode, points, match) < match.min_overlap:
+            mode = self._rescue(field, points, predicted)
         accepted = field.overlap(mode, points, match) >= match.min_overlap
         centre = mode if accepted else predicted
         stencil = centre + STENCIL * self.params.kernel_step
@@ -181,6 +200,16 @@ class GridSlam:
         pose = centre + self.rng.multivariate_normal(mean, covariance, method="eigh")
         pose[2] = wrap_angle(pose[2])
         return pose, log_eta, True
+
+    def _rescue(self, field: LikelihoodField, points: np.ndarray, predicted: np.ndarray) -> np.ndarray:
+        """The most likely pose (3,) of the refinements seeded by a correlative search around
+        ``predicted`` (3,) over the particle's occupied cells."""
+        covariance = self.params.rescue_covariance
+        grid = LikelihoodGrid(field.occupied_points(), self.params.rescue)
+        seeds = correlative_candidates(grid, points, predicted, covariance, self.params.rescue)
+        information = np.linalg.inv(covariance)
+        refined = np.array([refine_pose(field, points, seed, information, self.params.match) for seed in seeds])
+        return refined[np.argmax(field.log_likelihood(refined, points, self.params.match))]
 
     def _resample_if_needed(self) -> np.ndarray | None:
         """Systematic resampling when the effective sample size is low: the kept indexes, or None."""

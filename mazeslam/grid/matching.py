@@ -65,10 +65,15 @@ class LikelihoodField:
     """The distance (m) from each cell of ``window`` to its nearest occupied cell, interpolated."""
 
     def __init__(self, window: Window, params: MatchParams):
-        free = (window.values <= params.occupied_threshold).astype(np.uint8)
-        self.has_occupied = not free.all()
+        self.occupied = window.values > params.occupied_threshold
+        free = (~self.occupied).astype(np.uint8)
+        self.has_occupied = bool(self.occupied.any())
         self.distance = cv2.distanceTransform(free, cv2.DIST_L2, cv2.DIST_MASK_PRECISE) * window.resolution
         self.origin, self.resolution = window.origin, window.resolution
+
+    def occupied_points(self) -> np.ndarray:
+        """World positions (M, 2) of the occupied cells' centres, m."""
+        return self.origin + (np.argwhere(self.occupied) + 0.5) * self.resolution
 
     def lookup(self, points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Bilinear distance (...,) at world ``points`` (..., 2) and its gradient (..., 2), m/m.

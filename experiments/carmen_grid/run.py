@@ -1,0 +1,82 @@
+"""The grid filter (mazeslam.grid) on the 8 CARMEN building logs: aligned ATE at the scans against
+the logs' reference poses, wall-clock seconds against the log's duration, peak memory, and the best
+particle's map (map_server YAML + PGM + PNG) beside each log's own picture.
+
+Run: ``python experiments/carmen_grid/run.py [--seeds 0 1 2 3 4] [--logs aces csail ...] [--jobs 2]``.
+Each (log, seed) runs in its own process (one core each), so that its peak memory is its own.
+Results: ``experiments/carmen_grid/results/table.csv`` and ``results/<log>_seed<k>/``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import resource
+import tempfile
+import time
+from multiprocessing import Pool
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from mazeslam.evaluation.metrics import absolute_trajectory_error
+from mazeslam.grid import GridSlamParams, run_grid_slam
+from mazeslam.grid.map_io import grid_states, write_map
+from mazeslam.imports.carmen import import_carmen
+from mazeslam.loaded_run import load_run
+from mazeslam.sidecars import write_trajectory
+
+CARMEN = Path(__file__).resolve().parents[3] / "shared" / "data" / "carmen"
+RESULTS = Path(__file__).resolve().parent / "results"
+LOGS = ["aces", "csail", "edmonton", "fhw", "freiburg-079", "freiburg-101", "orebro", "seattle"]
+
+
+def run_one(job: tuple[str, int]) -> dict:
+    """Import one log, run the grid filter with one seed, write its map and trajectory."""
+    name, seed = job
+    with tempfile.TemporaryDirectory() as folder:
+        course = Path(folder) / f"{name}.log"
+        import_carmen(CARMEN / f"{name}-corrected.log.gz", course)
+        run = load_run(course)
+    began = time.perf_counter()
+    result = run_grid_slam(run.log, run.geometry, run.start_pose, GridSlamParams(seed=seed))
+    seconds = time.perf_counter() - began
+    reference = run.truth[result.scan_records]
+    ate = absolute_trajectory_error(result.best_poses, reference, align=True)
+    out = RESULTS / f"{name}_seed{seed}"
+    out.mkdir(parents=True, exist_ok=True)
+    write_map(grid_states(result.grid), out)
+    poses, covariances = result.record_trajectory(run.log, run.start_pose)
+    write_trajectory(out / "trajectory.csv", run.log.times, poses, covariances)
+    return {"log": name, "seed": seed, "scans": len(result.scan_records), "processed": int(result.processed.sum()),
+            "ate_rmse_m": ate["rmse"], "ate_max_m": ate["max"], "seconds": seconds,
+            "log_seconds": run.log.duration, "resamplings": result.resamplings,
+            "matched": float(np.nanmean(result.matched)),
+            "peak_mb": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024}
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--logs", nargs="+", default=LOGS)
+    parser.add_argument("--seeds", nargs="+", type=int, default=[0])
+    parser.add_argument("--jobs", type=int, default=2)
+    args = parser.parse_args()
+    jobs = [(name, seed) for name in args.logs for seed in args.seeds]
+    with Pool(args.jobs, maxtasksperchild=1) as pool:
+        rows = []
+        for row in pool.imap_unordered(run_one, jobs):
+            print(row, flush=True)
+            rows.append(row)
+    table = pd.DataFrame(rows).sort_values(["log", "seed"])
+    RESULTS.mkdir(parents=True, exist_ok=True)
+    path = RESULTS / "table.csv"
+    if path.exists():  # keep the rows of other logs and seeds
+        old = pd.read_csv(path)
+        keep = ~old.set_index(["log", "seed"]).index.isin(table.set_index(["log", "seed"]).index)
+        table = pd.concat([old[keep], table]).sort_values(["log", "seed"])
+    table.to_csv(path, index=False, float_format="%.4g")
+    print(table.to_markdown(index=False, floatfmt=".3g"))
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,58 @@
+"""The grid filter on a simulated building: a ring of corridors driven round more than once with
+biased wheel odometry; the filter must close the loop with a map that matches the walls."""
+
+import numpy as np
+import pytest
+
+from mazeslam.evaluation.metrics import absolute_trajectory_error, align_se2, apply_se2
+from mazeslam.filters.motion import dead_reckoning
+from mazeslam.grid import GridSlamParams, run_grid_slam
+from mazeslam.grid.map_io import OCCUPIED, grid_states
+from mazeslam.grid.synthetic import building_walls, simulate_building_log
+from mazeslam.log import read
+
+
+@pytest.fixture(scope="module")
+def building(tmp_path_factory):
+    simulated = simulate_building_log(tmp_path_factory.mktemp("grid") / "building.log")
+    course_log = read(simulated.path)
+    result = run_grid_slam(course_log, simulated.geometry, simulated.start_pose, GridSlamParams(particles=8))
+    return simulated, course_log, result
+
+
+def distance_to_walls(points: np.ndarray, walls: np.ndarray) -> np.ndarray:
+    """Distance (M,) from each of ``points`` (M, 2) to the nearest wall segment (W, 4), m."""
+    start, vector = walls[:, :2], walls[:, 2:] - walls[:, :2]
+    along = np.einsum("mwi,wi->mw", points[:, None] - start, vector) / np.einsum("wi,wi->w", vector, vector)
+    nearest = start + np.clip(along, 0, 1)[..., None] * vector
+    return np.hypot(*(points[:, None] - nearest).transpose(2, 0, 1)).min(axis=1)
+
+
+def test_the_filter_closes_the_loop_where_dead_reckoning_does_not(building):
+    simulated, course_log, result = building
+    truth = simulated.truth[result.scan_records]
+    drift = dead_reckoning(course_log, simulated.start_pose)[result.scan_records]
+    assert np.hypot(*(drift[-1, :2] - truth[-1, :2])) > 2.0  # the odometry alone misses the start by metres
+    assert np.hypot(*(result.best_poses[-1, :2] - truth[-1, :2])) < 0.25
+    assert absolute_trajectory_error(result.best_poses, truth, align=True)["rmse"] < 0.1
+    assert np.nanmean(result.matched) > 0.95
+
+
+def test_the_best_map_lies_on_the_walls(building):
+    simulated, _, result = building
+    occupancy = grid_states(result.grid)
+    cells = np.argwhere(occupancy.states == OCCUPIED)
+    centres = occupancy.origin[:2] + (cells + 0.5) * occupancy.resolution
+    # the map's frame is the filter's: moved onto the world's as its path is onto the true one
+    centres = apply_se2(align_se2(result.best_poses, simulated.truth[result.scan_records]), centres)
+    assert len(centres) > 500
+    assert np.mean(distance_to_walls(centres, building_walls()) < 0.1) > 0.9  # cells are 0.05 m
+
+
+def test_the_trajectory_has_a_row_per_record(building):
+    simulated, course_log, result = building
+    poses, covariances = result.record_trajectory(course_log, simulated.start_pose)
+    assert poses.shape == (len(course_log), 3) and covariances.shape == (len(course_log), 3, 3)
+    np.testing.assert_allclose(poses[result.scan_records], result.best_poses)
+    np.testing.assert_allclose(poses[0], simulated.start_pose)  # before the first scan
+    assert result.processed[0] and result.processed.sum() < len(result.processed) + 1
