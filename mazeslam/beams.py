@@ -93,6 +93,10 @@ class SensorOverrides:
         """The names of the settings that are given (not None)."""
         return [name for name, value in dataclasses.asdict(self).items() if value is not None]
 
+    def over(self, base: SensorOverrides) -> SensorOverrides:
+        """``base`` (a config's ``[sensor]``) with the settings given here (the command line) replacing its own."""
+        return dataclasses.replace(base, **{name: getattr(self, name) for name in self.given()})
+
     def apply(self, geometry: BeamGeometry) -> BeamGeometry:
         """``geometry`` with the given settings replaced."""
         return dataclasses.replace(geometry, **{name: getattr(self, name) for name in self.given()})

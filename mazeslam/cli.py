@@ -301,13 +301,41 @@ def sweep(sweep_file, out_dir, workers, scheduler, quiet):
     click.echo("wrote " + ", ".join(str(p) for p in [*result.paths.values(), *make_report(out_dir)[1:]]))
 
 
+@main.command()
+@click.argument("log_file", type=click.Path(exists=True, dir_okay=False, path_type=Path))
+@click.option("--config", "config_path", type=click.Path(exists=True, dir_okay=False, path_type=Path),
+              help="A slam config: its corner settings, scan matching and (without truth) the filter run.")
+@click.option("--write", "write_path", type=click.Path(dir_okay=False, path_type=Path),
+              help="Also write the settings to this TOML file.")
+@beam_geometry_options
+@click.option("--quiet", is_flag=True, help="No progress bar.")
+def calibrate(log_file, config_path, write_path, first_beam_angle, beam_direction, mount_x, quiet):
+    """Measure a log's noise (laser range, odometry, corner observations) as filter settings:
+    against the truth beside it when there is one, else against the filter's own path and map."""
+    from mazeslam.evaluation.calibration import calibrate as measure
+    from mazeslam.loaded_run import load_run
+    from mazeslam.slam import load_slam_config
+
+    config = load_slam_config(config_path)
+    run = load_run(log_file, _geometry_overrides(first_beam_angle, beam_direction, mount_x).over(config.sensor))
+    try:
+        lines = measure(run, config, progress=not quiet).settings()
+    except ValueError as error:
+        raise click.ClickException(f"{log_file}: {error}") from error
+    text = "\n".join(lines) + "\n"
+    click.echo(text, nl=False)
+    if write_path:
+        write_path.write_text(text)
+        click.echo(f"wrote {write_path}")
+
+
 @main.command(name="odometry-noise")
 @click.argument("log_file", type=click.Path(exists=True, dir_okay=False, path_type=Path))
 @click.option("--config", "config_path", type=click.Path(exists=True, dir_okay=False, path_type=Path),
               help="A slam config; with [scan_matching] enabled, the laser odometry is measured instead.")
 def odometry_noise(log_file, config_path):
     """Measure a log's odometry noise against its truth sidecar, as [fastslam] settings."""
-    from mazeslam.evaluation.odometry_noise import fit_noise, laser_stretch_errors, measure_odometry_noise
+    from mazeslam.evaluation.odometry_noise import measure_motion_noise
     from mazeslam.filters.scan_matching import laser_odometry
     from mazeslam.loaded_run import load_run
     from mazeslam.slam import load_slam_config
@@ -317,12 +345,10 @@ def odometry_noise(log_file, config_path):
     if run.truth is None:
         raise click.ClickException(f"{log_file}: no truth sidecar {run.name}.truth.csv: the noise is measured against it")
     truth_file = f"{run.name}.truth.csv"
+    laser = laser_odometry(run.log, run.geometry, config.scan_matching) if config.scan_matching.enabled else None
+    source = "laser odometry" if laser is not None else "odometry"
     try:
-        if config.scan_matching.enabled:
-            laser = laser_odometry(run.log, run.geometry, config.scan_matching)
-            noise, source = fit_noise(laser_stretch_errors(laser, run.truth[laser.scan_records])), "laser odometry"
-        else:
-            noise, source = measure_odometry_noise(run.log, run.truth), "odometry"
+        noise = measure_motion_noise(run.log, run.truth, laser)
     except ValueError as error:
         raise click.ClickException(f"{log_file}: {error}") from error
     click.echo(f"# {log_file}: {noise.stretches} stretches between observations, {noise.distance:.2f} m driven, "

@@ -8,6 +8,7 @@ downstream opens a sidecar again.
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -73,6 +74,12 @@ class LoadedRun:
         metres in one step (the exercise's TOL_JMP): glitches, left out of the motion."""
         distance = np.abs(self.log.increments[:, 0])
         return np.flatnonzero(self.log.is_odometry & (distance > jump_tolerance))
+
+    def log_without_glitches(self, jump_tolerance: float) -> log.CourseLog:
+        """The log with the glitches' odometry (``glitches``) set to no motion, as the filter moves."""
+        values = self.log.values.copy()
+        values[self.glitches(jump_tolerance), :2] = 0.0
+        return dataclasses.replace(self.log, values=values)
 
 
 def load_run(path: str | Path, sensor: SensorOverrides | None = None, strict: bool = True) -> LoadedRun:

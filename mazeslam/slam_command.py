@@ -28,7 +28,7 @@ def run_slam_command(log_file, config_path, out_dir, filter_changes: dict | None
     the ``[sensor]`` ones (None values: keep the config's)."""
     config = load_slam_config(config_path)
     config = dataclasses.replace(config, fastslam=with_changes(config.fastslam, **(filter_changes or {})),
-                                 sensor=with_changes(config.sensor, **dataclasses.asdict(sensor or SensorOverrides())))
+                                 sensor=(sensor or SensorOverrides()).over(config.sensor))
     run = load_run(log_file, config.sensor)
     updates = int(run.log.is_scan.sum() + run.log.is_landmark.sum())
     every = max(1, updates // ANIMATION_FRAMES) if animate else 0  # frames for the GIF, at most ~ANIMATION_FRAMES

@@ -20,7 +20,7 @@ class LoopFastSLAM(FastSLAM):
         if count:
             while (~self.exists).sum(axis=1).min() < count:
                 self._grow()
-            noise = self.params.observation_noise(covariances, count)
+            noise = self.params.inflation * self.params.observation_noise(covariances, count)
             for p in range(self.params.NPARTICLES):
                 self._update_particle(p, observations, noise, report)
         report.effective_sample_size = self.effective_sample_size()

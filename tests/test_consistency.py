@@ -12,7 +12,7 @@ from mazeslam.evaluation.metrics import normalized_estimation_error
 from mazeslam.filters.fastslam import FastSLAM, FastSLAMParams
 
 EXACT = FastSLAMParams(NPARTICLES=1, sigmaX=0, sigmaTH=0, sigmaTH_drive=0, sigmaR=0.01, sigmaB=0.02,
-                       observation_scale=0.0, resample_threshold=0)
+                       observation_scale=0.0, resample_threshold=0, inflation=1.0)
 
 
 def test_the_pose_covariance_is_the_weighted_covariance_of_the_cloud():

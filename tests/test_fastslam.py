@@ -7,7 +7,7 @@ import pytest
 from mazeslam.filters.fastslam import FastSLAM, FastSLAMParams
 
 EXACT = FastSLAMParams(NPARTICLES=1, sigmaX=0, sigmaTH=0, sigmaTH_drive=0, sigmaR=0.01, sigmaB=0.01,
-                       observation_scale=0.0, resample_threshold=0)
+                       observation_scale=0.0, resample_threshold=0, inflation=1.0)
 
 
 def observe(pose, landmark):
@@ -166,7 +166,7 @@ def test_fastslam2_draws_poses_from_the_kalman_posterior_of_motion_and_observati
     # Robot believed at the origin with 5 cm of x-uncertainty from the motion; a landmark known to
     # 1 mm straight ahead at 0.3 m is seen at 0.27 m: the posterior along x is the 1-D Kalman
     # combination of the motion (5 cm) and the observation (1 cm range noise plus the landmark).
-    params = FastSLAMParams(NPARTICLES=4000, sigmaR=0.01, sigmaB=0.01, observation_scale=0.0,
+    params = FastSLAMParams(NPARTICLES=4000, sigmaR=0.01, sigmaB=0.01, observation_scale=0.0, inflation=1.0,
                             resample_threshold=0, version=2, view_range=0.0, seed=1)
     slam = FastSLAM(params)
     slam.exists[:, 0] = True

@@ -28,16 +28,17 @@ from mazeslam.slam import SlamConfig, slam_on_run
 HERE = Path(__file__).resolve().parent
 
 
-def one_log(seed: int, particles: list[int], versions: list[int]) -> list[dict]:
-    """Simulate the default maze with ``seed``, run every filter setting on it, score each."""
+def one_log(seed: int, particles: list[int], versions: list[int], changes: dict) -> list[dict]:
+    """Simulate the default maze with ``seed``, run every filter setting on it (``changes`` to
+    ``[fastslam]`` applied), score each."""
     with tempfile.TemporaryDirectory() as folder:
         run = load_run(simulate(Path(folder) / "run.log", seed=seed, progress=False).log_path)
     rows = []
     for version in versions:
         for count in particles:
             config = SlamConfig()
-            config = dataclasses.replace(config, fastslam=dataclasses.replace(config.fastslam, NPARTICLES=count,
-                                                                              version=version, seed=seed))
+            config = dataclasses.replace(config, fastslam=dataclasses.replace(
+                config.fastslam, NPARTICLES=count, version=version, seed=seed, **changes))
             result = slam_on_run(run, config, progress=False)
             score = score_run(run, result)
             nis = nis_summary(result.nis)
@@ -96,9 +97,12 @@ def main() -> None:
     parser.add_argument("--versions", type=int, nargs="+", default=[1, 2])
     parser.add_argument("--workers", type=int, default=2)
     parser.add_argument("--out", type=Path, default=HERE)
+    parser.add_argument("--set", nargs="*", default=[], metavar="NAME=VALUE",
+                        help="[fastslam] settings to change, e.g. sigmaX=0.003 (for studies; the committed tables use none)")
     arguments = parser.parse_args()
+    changes = {name: float(value) for name, value in (item.split("=") for item in arguments.set)}
     with ProcessPoolExecutor(arguments.workers) as pool:
-        futures = [pool.submit(one_log, seed, arguments.particles, arguments.versions) for seed in arguments.seeds]
+        futures = [pool.submit(one_log, seed, arguments.particles, arguments.versions, changes) for seed in arguments.seeds]
         table = pd.DataFrame([row for future in futures for row in future.result()])
     arguments.out.mkdir(parents=True, exist_ok=True)
     table.drop(columns="nees").to_csv(arguments.out / "results.csv", index=False, float_format="%.6g")

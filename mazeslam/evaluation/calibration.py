@@ -1,4 +1,14 @@
-"""Measure a log's sensor noise from the log itself, in the units of the filter's settings.
+"""Measure a log's noise from the log itself, in the units of the filter's settings.
+
+``calibrate`` measures the three noises FastSLAM needs and says against what: the truth beside a
+simulated (or referenced) log, else the filter's own path and map, which needs no truth:
+
+* the laser's range noise, from the walls' scatter (below; no truth, no motion needed);
+* the odometry's (or laser odometry's) noise, stretch by stretch between observations
+  (``odometry_noise``);
+* the corner observations' noise, from repeated observations of the same landmarks: each
+  observation's residual against the landmark it most likely is, seen from the reference pose,
+  fitted to ``observation_scale`` x the extractor's covariance + diag(sigmaR^2, sigmaB^2).
 
 Range noise of the laser: every extracted wall is straight, so the scatter of its points around the
 fitted line is the range noise seen across the wall. A point at bearing b on a line with normal
@@ -13,12 +23,19 @@ It needs no truth and no motion: only straight walls.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass
 
 import numpy as np
+from scipy.optimize import nnls
 
+from mazeslam import log
+from mazeslam.evaluation.odometry_noise import MeasuredOdometryNoise, measure_motion_noise
+from mazeslam.filters import ekf
 from mazeslam.filters.corners import CornerExtractor
+from mazeslam.filters.scan_matching import laser_odometry
+from mazeslam.loaded_run import LoadedRun
 
 #: Beams hitting a wall farther than this from its normal are left out (their range errors are
 #: poorly seen across the wall), radians.
@@ -61,3 +78,216 @@ def laser_range_noise(scans: np.ndarray, extractor: CornerExtractor) -> RangeNoi
     if dof <= 0:
         raise ValueError("no straight walls in the scans: the range noise cannot be measured")
     return RangeNoise(math.sqrt(squared / dof), points, lines)
+
+
+@dataclass(frozen=True)
+class ObservationNoise:
+    """The noise of observations, in the filter's terms: a corner observation's covariance is
+    ``kind_scales[kind]`` times the one the line fits give (``[corners] covariance_scale``), plus
+    diag(sigmaR^2, sigmaB^2) (``[fastslam]``; all of it for landmark records, which come without
+    a covariance).
+
+    Attributes:
+        kind_scales: per kind, width x (1 + rho) / (1 - rho): ``widths[kind]`` how the fits'
+            covariance compares with the scatter, ``correlations[kind]`` rho the correlation of one
+            landmark's normalised errors from one scan to the next.
+        sigmaR: range noise beyond the fits' covariance, metres.
+        sigmaB: bearing noise beyond it, radians.
+        observations: how many observations it was measured on.
+    """
+
+    kind_scales: dict[str, float]
+    widths: dict[str, float]
+    correlations: dict[str, float]
+    sigmaR: float
+    sigmaB: float
+    observations: int
+
+
+@dataclass(frozen=True)
+class Residuals:
+    """Observations against the landmarks they most likely are (``observation_residuals``).
+
+    Attributes:
+        errors: (A, 2) z - h(pose, landmark): range (m) and bearing (rad).
+        covariances: (A, 2, 2) the covariance the extractor reported (zeros for landmark records).
+        kinds: (A,) the observations' kinds ("landmark" for landmark records).
+        landmarks: (A,) which landmark each is; updates: (A,) the number of the update it came in.
+    """
+
+    errors: np.ndarray
+    covariances: np.ndarray
+    kinds: np.ndarray
+    landmarks: np.ndarray
+    updates: np.ndarray
+
+
+def observations_by_record(run: LoadedRun, extractor: CornerExtractor | None):
+    """Yield ``(record index, z (K, 2), covariances (K, 2, 2), kinds (K,))`` for every scan (its
+    corners with the extractor's covariances) and every landmark record (zero covariance)."""
+    for record in run.log.records():
+        if isinstance(record, log.ScanRecord):
+            features = extractor.extract(record.ranges)
+            yield (record.index, features.observation_array(), features.observation_covariances(),
+                   [o.kind for o in features.observations])
+        elif isinstance(record, log.LandmarkRecord):
+            yield record.index, np.array([[record.range, record.bearing]]), np.zeros((1, 2, 2)), ["landmark"]
+
+
+def observation_residuals(run: LoadedRun, extractor: CornerExtractor | None, poses: np.ndarray, landmarks: np.ndarray,
+                          landmark_covariances: np.ndarray | None = None, gate: float = 16.0) -> Residuals:
+    """Every observation's innovation against the landmark it most likely is.
+
+    Args:
+        run: the loaded log.
+        extractor: its corner extractor (None for a log without scans).
+        poses: (R, 3) the robot pose at every record (the truth, or a filter's path).
+        landmarks: (L, 2) where the landmarks are (the true corners, or a filter's map), metres.
+        landmark_covariances: (L, 2, 2) their uncertainty, or None (exact).
+        gate: an observation farther (squared Mahalanobis under its own covariance plus the
+            landmark's, floored at 1 mm and 0.6 degrees) than this from every landmark is left out.
+    """
+    rows = []
+    floor = np.diag([1e-6, 1e-4])
+    for update, (record, observed_all, covariance_all, kinds) in enumerate(observations_by_record(run, extractor)):
+        if not len(landmarks):
+            break
+        predicted, h_landmark, _ = ekf.range_bearing(np.repeat(poses[record][None], len(landmarks), 0), landmarks)
+        spread = np.broadcast_to(floor, (len(landmarks), 2, 2))
+        if landmark_covariances is not None:
+            spread = spread + h_landmark @ landmark_covariances @ np.swapaxes(h_landmark, 1, 2)
+        for observed, covariance, kind in zip(observed_all, covariance_all, kinds):
+            innovation = ekf.innovation(observed, predicted)  # (L, 2)
+            distance2 = np.einsum("li,lij,lj->l", innovation, np.linalg.inv(covariance + spread), innovation)
+            nearest = int(distance2.argmin())
+            if distance2[nearest] < gate:
+                rows.append((innovation[nearest], covariance, kind, nearest, update))
+    if not rows:
+        return Residuals(np.empty((0, 2)), np.empty((0, 2, 2)), np.empty(0, dtype=str), np.empty(0, int), np.empty(0, int))
+    errors, covariances, kinds, which, updates = zip(*rows)
+    return Residuals(np.array(errors), np.array(covariances), np.array(kinds), np.array(which), np.array(updates))
+
+
+def fit_observation_noise(residuals: Residuals) -> ObservationNoise:
+    """The ``ObservationNoise`` that explains ``residuals``.
+
+    1. Widths and the extra terms: non-negative least squares of each squared error on the
+       covariance's diagonal entry for its kind (one column per kind that has covariances) and a
+       constant (sigmaR^2 for ranges, sigmaB^2 for bearings), each component's rows divided by its
+       median variance so that metres and radians weigh alike.
+    2. Correlations: of the errors (normalised by the fits' standard deviations) of one landmark
+       seen as the same kind in two consecutive updates, range and bearing pooled; clipped to
+       [0, 0.95].
+    """
+    errors, covariances, kinds = residuals.errors, residuals.covariances, residuals.kinds
+    if len(errors) < 10:
+        raise ValueError(f"only {len(errors)} observations matched a landmark: too few to measure their noise")
+    with_covariance = sorted({kind for kind, c in zip(kinds, covariances) if c[0, 0] > 0 and c[1, 1] > 0})
+    count = len(errors)
+    variances = np.stack([covariances[:, 0, 0], covariances[:, 1, 1]])  # (2, A)
+    units = [np.median(v[v > 0]) if (v > 0).any() else np.mean(errors[:, c] ** 2) for c, v in enumerate(variances)]
+    design = np.zeros((2 * count, len(with_covariance) + 2))
+    for column, kind in enumerate(with_covariance):
+        design[:count, column] = np.where(kinds == kind, variances[0], 0.0) / units[0]
+        design[count:, column] = np.where(kinds == kind, variances[1], 0.0) / units[1]
+    design[:count, -2], design[count:, -1] = 1.0 / units[0], 1.0 / units[1]
+    target = np.concatenate([errors[:, 0] ** 2 / units[0], errors[:, 1] ** 2 / units[1]])
+    solution, _ = nnls(design, target)
+    widths = {kind: float(width) for kind, width in zip(with_covariance, solution)}
+    correlations = {kind: _repeat_correlation(residuals, kind) for kind in with_covariance}
+    scales = {kind: widths[kind] * (1 + rho) / (1 - rho) for kind, rho in correlations.items()}
+    return ObservationNoise(scales, widths, correlations, math.sqrt(solution[-2]), math.sqrt(solution[-1]), count)
+
+
+def _repeat_correlation(residuals: Residuals, kind: str) -> float:
+    """Correlation of the normalised errors of one landmark seen as ``kind`` in consecutive
+    updates (range and bearing pooled), clipped to [0, 0.95]; 0 with fewer than 10 pairs."""
+    chosen = np.flatnonzero(residuals.kinds == kind)
+    normalised = residuals.errors[chosen] / np.sqrt(np.diagonal(residuals.covariances[chosen], axis1=1, axis2=2))
+    seen = {(int(residuals.landmarks[i]), int(residuals.updates[i])): n for n, i in enumerate(chosen)}
+    pairs = [(normalised[seen[(landmark, update - 1)]], normalised[n])
+             for (landmark, update), n in seen.items() if (landmark, update - 1) in seen]
+    if len(pairs) < 10:
+        return 0.0
+    before, after = (np.concatenate(side) for side in zip(*pairs))
+    return float(np.clip(np.corrcoef(before, after)[0, 1], 0.0, 0.95))
+
+
+@dataclass(frozen=True)
+class Calibration:
+    """What ``calibrate`` measured on one log.
+
+    Attributes:
+        source: the log; reference: what the residuals were taken against ("truth" or "the
+            filter's path and map").
+        range_noise: the laser's (None for a log without scans).
+        motion: the odometry's (or laser odometry's) noise; motion_source names which, against what.
+        observations: the corner (or landmark) observations' noise; None when too few observations
+            matched a landmark (observation_problem says why).
+    """
+
+    source: str
+    reference: str
+    range_noise: RangeNoise | None
+    motion: MeasuredOdometryNoise
+    motion_source: str
+    observations: ObservationNoise | None
+    observation_problem: str = ""
+
+    def settings(self) -> list[str]:
+        """The measured settings as TOML lines, each saying where its number comes from."""
+        noise, seen = self.motion.noise, self.observations
+        where = f"measured by mazeslam calibrate on {self.source} against {self.reference}"
+        lines = [f"# {where}", "[fastslam]",
+                 f"sigmaX = {noise.sigmaX:.4g}             # m per sqrt(m): {self.motion_source}, "
+                 f"{self.motion.stretches} stretches, {self.motion.distance:.2f} m",
+                 f"sigmaTH = {noise.sigmaTH:.4g}            # rad per sqrt(rad) turned ({self.motion.turn:.1f} rad)",
+                 f"sigmaTH_drive = {noise.sigmaTH_drive:.4g}      # rad per sqrt(m) driven"]
+        if seen is None:
+            lines.append(f"# observation noise not measured: {self.observation_problem}")
+        else:
+            lines += [f"sigmaR = {seen.sigmaR:.3g}             # m: range noise beyond the corners' covariance "
+                      f"({seen.observations} observations)",
+                      f"sigmaB = {seen.sigmaB:.3g}             # rad: bearing noise beyond it"]
+        if self.range_noise is None:
+            return lines
+        lines += ["", "[corners]"]
+        if seen is not None and seen.kind_scales:
+            lines += ["# width of the fits' covariance against the scatter x (1 + rho)/(1 - rho), rho the correlation"
+                      " of a landmark's errors from scan to scan: "
+                      + "; ".join(f"{kind} {seen.widths[kind]:.2f} x, rho {seen.correlations[kind]:.2f}"
+                                  for kind in seen.kind_scales),
+                      "covariance_scale = { " + ", ".join(f"{kind} = {scale:.3g}" for kind, scale in seen.kind_scales.items())
+                      + " }"]
+        lines += ["", "[corners.lines]",
+                  f"range_noise_std = {self.range_noise.std:.3g}   # m: the walls' scatter, "
+                  f"{self.range_noise.points} returns on {self.range_noise.lines} lines"]
+        return lines
+
+
+def calibrate(run: LoadedRun, config, progress: bool = False) -> Calibration:
+    """Measure ``run``'s noises (see the module docstring) under the slam ``config``
+    (``SlamConfig``: its corner settings, scan matching and, without truth, the filter that
+    provides the reference path and map)."""
+    from mazeslam.slam import slam_on_run
+
+    raw = dataclasses.replace(config.corners, covariance_scale={})  # measure the fits' own covariance
+    extractor = CornerExtractor(run.geometry, run.log.width, raw) if run.log.n_beams else None
+    range_noise = laser_range_noise(run.log.values[run.log.is_scan], extractor) if extractor is not None else None
+    laser = laser_odometry(run.log, run.geometry, config.scan_matching) if config.scan_matching.enabled else None
+    if run.truth is not None and len(run.true_corners):
+        reference, poses, landmarks, spread = "truth", run.truth, run.true_corners, None
+    else:
+        result = slam_on_run(run, config, progress, laser=laser)
+        reference, poses = "the filter's path and map", result.mean_poses
+        landmarks, spread = result.landmarks, result.landmark_covariances
+    motion = measure_motion_noise(run.log_without_glitches(config.odometry.jump_tolerance),
+                                  run.truth if run.truth is not None else poses, laser)
+    motion_source = (f"{'laser odometry' if laser is not None else 'odometry'} against "
+                     f"{'truth' if run.truth is not None else reference}")
+    residuals = observation_residuals(run, extractor, poses, landmarks, spread)
+    try:
+        return Calibration(str(run.path), reference, range_noise, motion, motion_source,
+                           fit_observation_noise(residuals))
+    except ValueError as problem:
+        return Calibration(str(run.path), reference, range_noise, motion, motion_source, None, str(problem))

@@ -114,6 +114,15 @@ def measure_odometry_noise(course_log: CourseLog, truth: np.ndarray) -> Measured
     return fit_noise(stretch_errors(course_log, truth))
 
 
+def measure_motion_noise(course_log: CourseLog, reference: np.ndarray,
+                         laser: LaserOdometry | None = None) -> MeasuredOdometryNoise:
+    """The noise of whatever moves the filter, against ``reference`` poses (R, 3) at every record
+    (the truth, or a filter's path): the laser odometry's when given, else the odometry's."""
+    if laser is not None:
+        return fit_noise(laser_stretch_errors(laser, np.asarray(reference)[laser.scan_records]))
+    return measure_odometry_noise(course_log, reference)
+
+
 def fit_noise(errors: np.ndarray) -> MeasuredOdometryNoise:
     """The noise parameters that fit the stretch errors (K, 4) ``[D, T, e_along, e_theta]`` by
     non-negative least squares (see the module docstring)."""

@@ -36,6 +36,7 @@ from mazeslam.config import require
 from mazeslam.filters.lines import LineParams, LineSegment, SplitAndMerge
 
 FIXED_KINDS = ("corner", "wall_end")
+KINDS = (*FIXED_KINDS, "occluded", "gap", "edge", "junction")
 
 
 @dataclass(frozen=True)
@@ -61,6 +62,12 @@ class CornerParams:
             different corner of that face (about half the wall thickness; 1 cm walls: 5 mm).
         mode: ``"corners"`` (fixed landmarks only) or ``"endpoints"`` (every segment end point, as
             the exercise's extract_beacon).
+        covariance_scale: per kind, a factor on the covariance the line fits give (kinds not
+            named: 1). ``mazeslam calibrate`` measures it: how wide the fits' covariance is against
+            the observations' scatter, times (1 + rho) / (1 - rho) for the correlation rho of one
+            landmark's errors from one scan to the next (a wall end's position along the wall
+            depends on where the last beam lands, which changes slowly as the robot moves: its
+            errors repeat, and the filter must not count them as new information each scan).
     """
 
     lines: LineParams = field(default_factory=LineParams)
@@ -73,6 +80,7 @@ class CornerParams:
     max_end_spacing: float = 0.02
     end_face_std: float = 0.005
     mode: str = "corners"
+    covariance_scale: dict[str, float] = field(default_factory=lambda: {"corner": 0.85, "wall_end": 5.5})
 
     def __post_init__(self):
         require(0 <= self.min_range < self.max_range,
@@ -84,6 +92,11 @@ class CornerParams:
         require(self.max_end_spacing > 0, f"max_end_spacing must be positive, got {self.max_end_spacing}")
         require(self.end_face_std >= 0, f"end_face_std must be >= 0, got {self.end_face_std}")
         require(self.mode in ("corners", "endpoints"), f"mode must be 'corners' or 'endpoints', got {self.mode!r}")
+        require(isinstance(self.covariance_scale, dict) and set(self.covariance_scale) <= set(KINDS),
+                f"covariance_scale names kinds among {', '.join(KINDS)}, got {self.covariance_scale!r}")
+        require(all(isinstance(value, (int, float)) and 0 < value < math.inf
+                    for value in self.covariance_scale.values()),
+                f"covariance_scale factors must be positive numbers, got {self.covariance_scale!r}")
 
 
 @dataclass(slots=True)
@@ -337,7 +350,7 @@ class CornerExtractor:
         rng2 = x * x + y * y
         rng = math.sqrt(rng2)
         jacobian = (x / rng, y / rng, -y / rng2, x / rng2)  # d(range, bearing)/d(x, y)
-        covariance_xy = np.asarray(covariance_xy)
+        covariance_xy = np.asarray(covariance_xy) * self.params.covariance_scale.get(kind, 1.0)
         return CornerObservation(x, y, rng, math.atan2(y, x), kind, covariance_xy,
                                  np.array(_sandwich(jacobian, covariance_xy.tolist())), int(beam), facing)
 

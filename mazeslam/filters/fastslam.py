@@ -56,21 +56,21 @@ class Association(enum.StrEnum):
 class FastSLAMParams:
     """Filter settings, named as in the exercise's control_panel.m where it has them.
 
-    The odometry defaults follow from the simulator's wheel slip (0.003 m per sqrt(m) per wheel,
-    wheelbase 53 mm) with a 25 % margin: distance 0.003/sqrt(2), heading from driving
-    0.003 sqrt(2)/0.053, heading from turning on the spot 0.003/sqrt(0.053) (each per square root of
-    the motion).
+    The noise defaults are measured, not tuned: the medians of ``mazeslam calibrate`` against the
+    truth of ten simulated default mazes (experiments/calibration/summary.md). The odometry's
+    match the simulator's wheel slip (0.003 m per sqrt(m) per wheel gives sigmaX 0.0021); the corner
+    extractor's covariances, scaled per kind (``CornerParams.covariance_scale``), explain the
+    residuals with no further range or bearing term (sigmaR = sigmaB = 0). ``inflation`` is the
+    filter's own consistency margin on top of them.
 
     Attributes:
         NPARTICLES: number of particles.
         sigmaX: odometry distance noise, m per sqrt(m) travelled.
         sigmaTH: odometry heading noise from turning, rad per sqrt(rad) turned.
         sigmaTH_drive: odometry heading noise from driving, rad per sqrt(m) travelled.
-        sigmaR, sigmaB: range (m) and bearing (rad) noise of an observation; with
-            ``observation_scale`` added to the covariance the corner extractor reports,
-            which already carries the laser's range noise, so the defaults are small (1 mm,
-            0.29 degrees): 3 mm and 1 degree counted that noise twice and doubled the aligned
-            ATE over 20 seeds (docs/fastslam.md).
+        sigmaR, sigmaB: range (m) and bearing (rad) noise of an observation beyond the covariance
+            the corner extractor reports (which already carries the laser's range noise): the
+            whole noise of observations that come without one (landmark records).
         observation_scale: each observation's own covariance (from the corner extractor's line
             fits) enters the noise multiplied by this (0: not used; ``mazeslam calibrate``
             measures it).
@@ -94,15 +94,21 @@ class FastSLAMParams:
             face corners of a wall end lie a wall's thickness apart but face opposite ways, the
             corners either side of a T-junction's stem 90 degrees apart, while one point seen as a
             corner or as a wall end faces 45 degrees apart. 180: off.
+        inflation: the filter's consistency margin: every noise covariance it uses (motion and
+            observation) is multiplied by this. The noise terms above are measured; a particle
+            filter still underestimates its uncertainty (resampling narrows the paths' ancestry,
+            Bailey et al. 2006; landmarks are linearised), so the margin is chosen for consistency
+            - the smallest in (1, 1.25, 1.5, 2) whose pose NEES stays consistent over ten seeds
+            (experiments/consistency) - never for the trajectory error.
         seed: seeds the filter's random draws.
     """
 
     NPARTICLES: int = 100
-    sigmaX: float = 0.0027
-    sigmaTH: float = 0.017
-    sigmaTH_drive: float = 0.1
-    sigmaR: float = 0.001
-    sigmaB: float = 0.005
+    sigmaX: float = 0.00203
+    sigmaTH: float = 0.0120
+    sigmaTH_drive: float = 0.0787
+    sigmaR: float = 0.0
+    sigmaB: float = 0.0
     observation_scale: float = 1.0
     gate: float = 9.21
     new_landmark_gate: float = 16.0
@@ -112,6 +118,7 @@ class FastSLAMParams:
     tentative_limit: int = 3
     version: int = 2
     facing_gate: float = 67.5
+    inflation: float = 2.0
     seed: int = 0
 
     def __post_init__(self):
@@ -129,12 +136,14 @@ class FastSLAMParams:
                 f"association must be one of {', '.join(Association)}, got {self.association!r}")
         object.__setattr__(self, "association", Association(self.association))
         require(self.view_range >= 0 and self.tentative_limit >= 1, "view_range must be >= 0 and tentative_limit >= 1")
+        require(1 <= self.inflation < math.inf, f"inflation must be a factor >= 1, got {self.inflation}")
         require(0 < self.facing_gate <= 180, f"facing_gate must be in (0, 180] degrees, got {self.facing_gate}")
         require(self.version in PROPOSALS, f"version must be 1 or 2 (FastSLAM 1.0 or 2.0), got {self.version}")
 
     def observation_noise(self, covariances: np.ndarray | None, count: int) -> np.ndarray:
-        """Observation noise R (K, 2, 2) of ``count`` observations: diag(sigmaR^2, sigmaB^2) plus
-        ``observation_scale`` times each one's own covariance (K, 2, 2) when given."""
+        """Observation noise R (K, 2, 2) of ``count`` observations as measured: diag(sigmaR^2,
+        sigmaB^2) plus ``observation_scale`` times each one's own covariance (K, 2, 2) when given
+        (the filter multiplies it by ``inflation``)."""
         fixed = np.diag([self.sigmaR**2, self.sigmaB**2])
         if covariances is None or self.observation_scale == 0:
             return np.broadcast_to(fixed, (count, 2, 2)).copy()
@@ -142,7 +151,8 @@ class FastSLAMParams:
 
     @property
     def odometry_noise(self) -> OdometryNoise:
-        """The odometry terms sigmaX, sigmaTH, sigmaTH_drive as one noise model."""
+        """The odometry terms sigmaX, sigmaTH, sigmaTH_drive as one noise model (as measured; the
+        filter multiplies its variances by ``inflation``)."""
         return OdometryNoise(self.sigmaX, self.sigmaTH, self.sigmaTH_drive)
 
 
@@ -200,6 +210,7 @@ class FastSLAM:
     def __init__(self, params: FastSLAMParams, start_pose=(0.0, 0.0, 0.0), capacity: int = 32):
         self.params = params
         self.proposal = PROPOSALS[params.version]()
+        self.motion_noise = params.odometry_noise.inflated(params.inflation)
         self.rng = np.random.default_rng(params.seed)
         p = params.NPARTICLES
         self.poses = np.tile(np.asarray(start_pose, dtype=float), (p, 1))
@@ -223,14 +234,14 @@ class FastSLAM:
         observations (``update``) before a pose is drawn.
         """
         self.poses, self.pose_covariances = self.proposal.predict(
-            self.poses, self.pose_covariances, distance, turn, self.params.odometry_noise, self.rng)
+            self.poses, self.pose_covariances, distance, turn, self.motion_noise, self.rng)
 
     def predict_relative(self, increment) -> None:
         """Move every particle by a relative motion ``increment`` (dx, dy, dtheta) given in its own
         robot frame (laser odometry), with the noise of ``OdometryNoise.relative_covariance``; the
         proposal decides when the noise is drawn, as in ``predict``."""
         increment = np.asarray(increment, dtype=float)
-        covariance = self.params.odometry_noise.relative_covariance(increment)
+        covariance = self.motion_noise.relative_covariance(increment)
         self.poses, self.pose_covariances = self.proposal.predict_relative(
             self.poses, self.pose_covariances, increment, covariance, self.rng)
 
@@ -274,7 +285,7 @@ class FastSLAM:
             raise ValueError("association='known' needs the observations' ids")
         while count and (~self.exists).sum(axis=1).min() < count:  # room for every observation to start a landmark
             self._grow()
-        noise = self.params.observation_noise(covariances, count)
+        noise = self.params.inflation * self.params.observation_noise(covariances, count)
         m = self._used_slots()
         # 1. Association, under the model the weights use.
         prior = self._model(observations, noise, m, self.proposal.carries_pose_uncertainty)

@@ -46,6 +46,11 @@ class OdometryNoise:
         for name in ("sigmaX", "sigmaTH", "sigmaTH_drive"):
             require(getattr(self, name) >= 0, f"{name} must be >= 0, got {getattr(self, name)}")
 
+    def inflated(self, factor: float) -> OdometryNoise:
+        """This noise with every variance multiplied by ``factor``."""
+        root = factor**0.5
+        return OdometryNoise(root * self.sigmaX, root * self.sigmaTH, root * self.sigmaTH_drive)
+
     def increment_covariance(self, distance: float, turn: float) -> np.ndarray:
         """Covariance (2, 2) of an odometry increment (distance m, turn rad): diagonal,
         ``sigmaX^2 |d|`` and ``sigmaTH^2 |turn| + sigmaTH_drive^2 |d|``."""

@@ -209,7 +209,7 @@ def build_problem(course_log: CourseLog, observations: list[np.ndarray], covaria
         covariances: per scan record, (K_s, 2, 2) their covariances (the corner extractor's).
         ids: per scan record, (K_s,) the landmark identity of each observation; -1: left out.
         params: the noise terms sigmaX, sigmaTH, sigmaTH_drive, sigmaR, sigmaB and
-            observation_scale, as FastSLAM uses them (``FastSLAMParams.observation_noise``).
+            observation_scale as measured (``FastSLAMParams.observation_noise``: without the filter's inflation).
         start_pose: (3,) the fixed start pose, world frame.
     The solver starts from dead reckoning, and each landmark where its first observation puts it.
     """
