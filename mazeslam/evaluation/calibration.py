@@ -35,6 +35,7 @@ from mazeslam.evaluation.odometry_noise import MeasuredOdometryNoise, measure_mo
 from mazeslam.filters import ekf
 from mazeslam.filters.corners import CornerExtractor
 from mazeslam.filters.scan_matching import laser_odometry
+from mazeslam.geometry import polar_to_cartesian, transform_points
 from mazeslam.loaded_run import LoadedRun
 
 #: Beams hitting a wall farther than this from its normal are left out (their range errors are
@@ -135,33 +136,28 @@ def observations_by_record(run: LoadedRun, extractor: CornerExtractor | None):
 
 
 def observation_residuals(run: LoadedRun, extractor: CornerExtractor | None, poses: np.ndarray, landmarks: np.ndarray,
-                          landmark_covariances: np.ndarray | None = None, gate: float = 16.0) -> Residuals:
-    """Every observation's innovation against the landmark it most likely is.
+                          radius: float) -> Residuals:
+    """Every observation's innovation against the landmark it most likely is: the nearest to where
+    the pose puts it, within ``radius`` metres (farther ones are left out).
 
     Args:
         run: the loaded log.
         extractor: its corner extractor (None for a log without scans).
         poses: (R, 3) the robot pose at every record (the truth, or a filter's path).
         landmarks: (L, 2) where the landmarks are (the true corners, or a filter's map), metres.
-        landmark_covariances: (L, 2, 2) their uncertainty, or None (exact).
-        gate: an observation farther (squared Mahalanobis under its own covariance plus the
-            landmark's, floored at 1 mm and 0.6 degrees) than this from every landmark is left out.
+        radius: metres (the ``[evaluation] match_radius``).
     """
     rows = []
-    floor = np.diag([1e-6, 1e-4])
     for update, (record, observed_all, covariance_all, kinds) in enumerate(observations_by_record(run, extractor)):
-        if not len(landmarks):
-            break
-        predicted, h_landmark, _ = ekf.range_bearing(np.repeat(poses[record][None], len(landmarks), 0), landmarks)
-        spread = np.broadcast_to(floor, (len(landmarks), 2, 2))
-        if landmark_covariances is not None:
-            spread = spread + h_landmark @ landmark_covariances @ np.swapaxes(h_landmark, 1, 2)
-        for observed, covariance, kind in zip(observed_all, covariance_all, kinds):
-            innovation = ekf.innovation(observed, predicted)  # (L, 2)
-            distance2 = np.einsum("li,lij,lj->l", innovation, np.linalg.inv(covariance + spread), innovation)
-            nearest = int(distance2.argmin())
-            if distance2[nearest] < gate:
-                rows.append((innovation[nearest], covariance, kind, nearest, update))
+        if not len(landmarks) or not len(observed_all):
+            continue
+        points = transform_points(poses[record], polar_to_cartesian(observed_all[:, 0], observed_all[:, 1]))
+        distances = np.linalg.norm(points[:, None, :] - landmarks[None], axis=2)  # (K, L)
+        predicted, _, _ = ekf.range_bearing(np.repeat(poses[record][None], len(landmarks), 0), landmarks)
+        for k, nearest in enumerate(distances.argmin(axis=1)):
+            if distances[k, nearest] <= radius:
+                rows.append((ekf.innovation(observed_all[k], predicted[nearest]), covariance_all[k], kinds[k],
+                             int(nearest), update))
     if not rows:
         return Residuals(np.empty((0, 2)), np.empty((0, 2, 2)), np.empty(0, dtype=str), np.empty(0, int), np.empty(0, int))
     errors, covariances, kinds, which, updates = zip(*rows)
@@ -276,16 +272,15 @@ def calibrate(run: LoadedRun, config, progress: bool = False) -> Calibration:
     range_noise = laser_range_noise(run.log.values[run.log.is_scan], extractor) if extractor is not None else None
     laser = laser_odometry(run.log, run.geometry, config.scan_matching) if config.scan_matching.enabled else None
     if run.truth is not None and len(run.true_corners):
-        reference, poses, landmarks, spread = "truth", run.truth, run.true_corners, None
+        reference, poses, landmarks = "truth", run.truth, run.true_corners
     else:
         result = slam_on_run(run, config, progress, laser=laser)
-        reference, poses = "the filter's path and map", result.mean_poses
-        landmarks, spread = result.landmarks, result.landmark_covariances
+        reference, poses, landmarks = "the filter's path and map", result.mean_poses, result.landmarks
     motion = measure_motion_noise(run.log_without_glitches(config.odometry.jump_tolerance),
                                   run.truth if run.truth is not None else poses, laser)
     motion_source = (f"{'laser odometry' if laser is not None else 'odometry'} against "
                      f"{'truth' if run.truth is not None else reference}")
-    residuals = observation_residuals(run, extractor, poses, landmarks, spread)
+    residuals = observation_residuals(run, extractor, poses, landmarks, config.evaluation.match_radius)
     try:
         return Calibration(str(run.path), reference, range_noise, motion, motion_source,
                            fit_observation_noise(residuals))
