@@ -1,6 +1,6 @@
 """Planar geometry shared by every stage: angles, SE(2) poses, polar/cartesian points.
 
-Conventions (see DESIGN.md): world frame X, Y in metres; heading theta in radians, wrapped to
+Conventions (docs/architecture.md): world frame X, Y in metres; heading theta in radians, wrapped to
 (-pi, pi]; robot frame Xr forward, Yr left; bearings counter-clockwise from Xr.
 A pose is an array ``(x, y, theta)``; arrays of poses are shaped ``(..., 3)`` and every function
 broadcasts over the leading axes.
