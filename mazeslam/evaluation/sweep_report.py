@@ -10,13 +10,39 @@ import matplotlib
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
 import pandas as pd  # noqa: E402
 
-from mazeslam.evaluation.sweep import MAPS, summarise, summary_markdown  # noqa: E402
+from mazeslam.evaluation.sweep import MAPS, summarise  # noqa: E402
 
-PLOTTED = [("ate_rmse", "ATE RMSE [m]"), ("ate_aligned_rmse", "ATE RMSE, aligned [m]"),
-           ("optimum_ratio", "ATE / batch optimum's"), ("optimum_aligned_ratio", "ATE / batch optimum's, aligned"),
-           ("map_aligned_rmse", "map RMSE, aligned [m]"), ("slam_seconds", "FastSLAM run time [s]")]
+#: The summary's columns: (metric, header). Metrics an older table lacks are left out.
+REPORTED = [("ate_rmse", "ATE [mm]"), ("ate_aligned_rmse", "ATE aligned [mm]"),
+            ("optimum_ate_rmse", "optimum's ATE [mm]"), ("optimum_ratio", "ATE / optimum's"),
+            ("optimum_aligned_ratio", "aligned ATE / optimum's"), ("reckoning_ate_rmse", "dead reckoning ATE [mm]"),
+            ("map_aligned_rmse", "map aligned [mm]"), ("landmarks", "landmarks"),
+            ("median_nees", "median NEES"), ("mean_nees", "mean NEES"), ("nees_inside_95", "NEES inside 95 %"),
+            ("nis_mean", "NIS mean"), ("nis_inside_95", "NIS inside 95 %"),
+            ("resampled_fraction", "resampled scans"), ("slam_seconds", "run time [s]")]
+
+#: The plots' panels: (metric, axis label, reference lines {value: label}, log scale).
+PLOTTED = [("ate_rmse", "ATE RMSE [mm]", {}, False),
+           ("ate_aligned_rmse", "ATE RMSE, SE(2)-aligned [mm]", {}, False),
+           ("optimum_ratio", "ATE / batch optimum's ATE", {1.0: "optimum"}, False),
+           ("optimum_aligned_ratio", "aligned ATE / optimum's aligned ATE", {1.0: "optimum"}, False),
+           ("median_nees", "median pose NEES (log)", {3.0: "consistent (3)", 7.81: "95 % bound"}, True),
+           ("nis_mean", "mean NIS", {2.0: "consistent (2)"}, False),
+           ("map_aligned_rmse", "map RMSE, aligned [mm]", {}, False),
+           ("slam_seconds", "FastSLAM run time [s]", {}, False)]
+
+#: Axis labels (with units) of the settings sweeps vary, by their short name.
+SETTING_LABELS = {
+    "NPARTICLES": "number of particles", "version": "FastSLAM version", "beams": "scan points N (beams over 360 deg)",
+    "mode": "landmarks", "sigmaR+sigmaB": "assumed sensor noise sigmaR [m] / sigmaB [rad]",
+    "sigmaX+sigmaTH+sigmaTH_drive": "assumed odometry noise sigmaX [m/sqrt(m)] / sigmaTH [rad/sqrt(rad)] / "
+                                    "sigmaTH_drive [rad/sqrt(m)]",
+    "observation_scale": "observation_scale (x the corners' calibrated covariance)",
+    "inflation": "inflation (x every noise variance)", "range_noise_std": "laser range noise [m]",
+}
 
 
 def short_name(key: str) -> str:
@@ -28,49 +54,120 @@ def make_report(out_dir: str | Path) -> list[Path]:
     """Write summary.md, one plot per grid setting and the maps side by side; return the files."""
     out_dir = Path(out_dir)
     meta = json.loads((out_dir / "sweep.json").read_text())
-    table = pd.read_csv(out_dir / "results.csv")
+    table = in_millimetres(pd.read_csv(out_dir / "results.csv"))
     keys = list(meta["grid"])
     written = [out_dir / "summary.md"]
-    written[0].write_text(summary_markdown(table, keys))
+    written[0].write_text(summary_table(table, keys))
     for key in keys:
-        written.append(_plot_against(table, key, [k for k in keys if k != key], out_dir))
+        written.append(_plot_against(table, key, [k for k in keys if k != key], out_dir, meta.get("name", "")))
     maps = _maps_side_by_side(table, keys, out_dir)
     if maps is not None:
         written.append(maps)
     return written
 
 
-def _plot_against(table: pd.DataFrame, key: str, others: list[str], out_dir: Path) -> Path:
-    """Each metric of ``PLOTTED`` the table has (older tables lack the optimum's) against one grid
-    setting, a line per combination of the others."""
-    plotted = [(metric, title) for metric, title in PLOTTED if table.get(metric, pd.Series()).notna().any()]
-    summary = summarise(table, [key] + others)
-    fig, axes = plt.subplots(1, len(plotted), figsize=(4.2 * len(plotted), 3.6))
-    groups = summary.groupby(others) if others else [((), summary)]
+def in_millimetres(table: pd.DataFrame) -> pd.DataFrame:
+    """The table with its RMSE columns (metres in results.csv) in millimetres, as the report shows them."""
+    table = table.copy()
+    for column in table.columns:
+        if column.endswith("rmse"):
+            table[column] = table[column] * 1000.0
+    return table
+
+
+def summary_table(table: pd.DataFrame, keys: list[str]) -> str:
+    """Mean +- 95 % confidence half-width over the seeds of every ``REPORTED`` metric, per grid cell."""
+    reported = [(metric, header) for metric, header in REPORTED if metric in table]
+    summary = summarise(table, keys, [metric for metric, _ in reported])
+    shown = summary[keys + ["runs"]].rename(columns={key: short_name(key) for key in keys})
+    for metric, header in reported:
+        shown[header] = [f"{m:.3g} ± {h:.2g}" if not math.isnan(h) else f"{m:.4g}"
+                         for m, h in zip(summary[metric], summary[f"{metric}_ci95"])]
+    return ("Mean ± 95 % confidence half-width over the seeds, per grid cell. ATE: the particles' mean path "
+            "against the truth (aligned: after the best rigid motion); optimum: the batch least-squares "
+            "solution of the same log with the filter's noise model and the true association (ratio 1: as good "
+            "as any estimator); NEES: pose error normalised by the cloud's covariance, per record (consistent: "
+            "3, 95 % of records under 7.81); NIS: innovation of each associated observation normalised by its "
+            "predicted covariance (consistent: 2, 95 % under 5.99); resampled: share of scans.\n\n"
+            + shown.to_markdown(index=False) + "\n")
+
+
+def _plot_against(table: pd.DataFrame, key: str, others: list[str], out_dir: Path, name: str = "") -> Path:
+    """Each metric of ``PLOTTED`` the table has against one grid setting, a line per combination of
+    the others: mean over the seeds with its 95 % confidence interval (clipped at zero; NEES: the
+    median over seeds with the quartiles, on a log axis)."""
+    plotted = [spec for spec in PLOTTED if table.get(spec[0], pd.Series(dtype=float)).notna().any()]
+    summary = summarise(table, [key] + others, [spec[0] for spec in plotted] + ["reckoning_ate_rmse"])
+    columns = 4
+    rows = math.ceil(len(plotted) / columns)
+    fig, axes = plt.subplots(rows, columns, figsize=(4.3 * columns, 3.5 * rows + 1.0), squeeze=False)
+    axes = list(axes.flat)
+    for ax in axes[len(plotted):]:
+        ax.axis("off")
+    groups = list(summary.groupby(others)) if others else [((), summary)]
     numeric = pd.api.types.is_numeric_dtype(summary[key])
-    for label, group in groups:
-        group = group.sort_values(key)
-        name = ", ".join(f"{short_name(o)}={v}" for o, v in zip(others, label if isinstance(label, tuple) else (label,)))
-        for ax, (metric, title) in zip(axes, plotted):
-            x = group[key] if numeric else group[key].astype(str)
-            ax.errorbar(x, group[metric], yerr=group[f"{metric}_ci95"].fillna(0), marker="o", capsize=3,
-                        label=name or None)
-    for ax, (metric, title) in zip(axes, plotted):
+    values = sorted(summary[key].unique()) if numeric else list(dict.fromkeys(table[key].astype(str)))
+    positions = {value: k for k, value in enumerate(values)}
+    categorical = not numeric or any(isinstance(v, str) for v in values)
+    for index, (label, group) in enumerate(groups):
+        group = group.sort_values(key) if numeric else group.set_index(group[key].astype(str)).loc[
+            [v for v in values if v in set(group[key].astype(str))]].reset_index(drop=True)
+        legend = ", ".join(f"{short_name(o)}={v}" for o, v in zip(others, label if isinstance(label, tuple) else (label,)))
+        x = group[key].to_numpy() if not categorical else np.array([positions[str(v)] for v in group[key]], float)
+        if categorical and len(groups) > 1:  # side by side, not on top of each other
+            x = x + 0.08 * (index - (len(groups) - 1) / 2)
+        for ax, (metric, _, _, log) in zip(axes, plotted):
+            if log:
+                cells = table if not others else table[
+                    np.logical_and.reduce([table[o] == v for o, v in
+                                           zip(others, label if isinstance(label, tuple) else (label,))])]
+                grouped = cells.groupby(key)[metric]
+                quartiles = grouped.quantile([0.25, 0.5, 0.75]).unstack()
+                quartiles = quartiles.loc[[v for v in group[key]]]
+                middle = quartiles[0.5].to_numpy()
+                yerr = [middle - quartiles[0.25].to_numpy(), quartiles[0.75].to_numpy() - middle]
+                ax.errorbar(x, middle, yerr=yerr, marker="o", capsize=3, label=legend or "FastSLAM")
+                continue
+            mean = group[metric].to_numpy(dtype=float)
+            half = group[f"{metric}_ci95"].fillna(0).to_numpy(dtype=float)
+            lower = np.minimum(half, np.maximum(mean, 0))  # an RMSE, a ratio or a time is never below zero
+            ax.errorbar(x, mean, yerr=[lower, half], marker="o", capsize=3, label=legend or "FastSLAM")
+    for ax, (metric, title, lines, log) in zip(axes, plotted):
         if metric == "ate_rmse" and "reckoning_ate_rmse" in summary:
             ax.axhline(summary["reckoning_ate_rmse"].mean(), color="0.5", linestyle="--", label="dead reckoning")
-        if metric.startswith("optimum"):
-            ax.axhline(1.0, color="0.5", linestyle=":")  # as good as the batch optimum
-        ax.set_title(title, fontsize=10)
-        ax.set_xlabel(short_name(key))
-        if numeric and summary[key].min() > 0 and summary[key].max() / summary[key].min() >= 20:
+        for value, text in lines.items():
+            ax.axhline(value, color="0.4", linestyle=":", linewidth=1)
+            ax.annotate(text, (0.01, value), xycoords=("axes fraction", "data"), fontsize=7, color="0.3",
+                        va="bottom")
+        ax.set_ylabel(title, fontsize=9)
+        ax.set_title(title.replace(" (log)", ""), fontsize=10)
+        ax.set_xlabel(SETTING_LABELS.get(short_name(key), short_name(key)), fontsize=8)
+        if log:
+            ax.set_yscale("log")
+        elif not metric.startswith("optimum"):
+            ax.set_ylim(bottom=0)
+        if categorical:
+            ax.set_xticks(range(len(values)), [str(v).replace("/", "/\n") for v in values], fontsize=7)
+        elif summary[key].min() > 0 and summary[key].max() / summary[key].min() >= 20:
             ax.set_xscale("log")
+            ax.set_xticks(values, [f"{v:g}" for v in values], fontsize=8)
+            ax.minorticks_off()
+        else:
+            ax.set_xticks(values, [f"{v:g}" for v in values], fontsize=8)
         ax.grid(alpha=0.3)
-    handles, labels = axes[0].get_legend_handles_labels()
-    if labels:
-        fig.legend(handles, labels, loc="lower center", ncol=min(len(labels), 5), fontsize=8)
-    fig.tight_layout(rect=(0, 0.1 if labels else 0, 1, 1))
+    handles, labels = [], []
+    for ax in axes[:len(plotted)]:
+        for handle, text in zip(*ax.get_legend_handles_labels()):
+            if text not in labels:
+                handles.append(handle)
+                labels.append(text)
+    seeds = table.seed.nunique()
+    fig.suptitle(f"{name or out_dir.name}: FastSLAM against {short_name(key)}, {seeds} seeds "
+                 f"(mean and 95 % CI; NEES: median over seeds and quartiles)", fontsize=11)
+    fig.legend(handles, labels, loc="lower center", ncol=min(len(labels), 5), fontsize=8)
+    fig.tight_layout(rect=(0, 0.06, 1, 0.96))
     path = out_dir / f"plot_{short_name(key)}.png"
-    fig.savefig(path, dpi=110)
+    fig.savefig(path, dpi=100)
     plt.close(fig)
     return path
 
@@ -83,25 +180,28 @@ def _maps_side_by_side(table: pd.DataFrame, keys: list[str], out_dir: Path, limi
         return None
     columns = min(len(files), 4)
     rows = math.ceil(len(files) / columns)
-    fig, axes = plt.subplots(rows, columns, figsize=(3.6 * columns, 3.6 * rows), squeeze=False)
+    fig, axes = plt.subplots(rows, columns, figsize=(3.6 * columns, 3.6 * rows + 0.6), squeeze=False)
     for ax, file, (_, row) in zip(axes.flat, files, first.iterrows()):
         drawing = json.loads(file.read_text())
         for x1, y1, x2, y2 in drawing["walls"]:
             ax.plot([x1, x2], [y1, y2], color="0.6", linewidth=0.8)
         truth = pd.DataFrame(drawing["truth"])
-        ax.plot(truth[0], truth[1], color="tab:green", linewidth=0.8)
+        ax.plot(truth[0], truth[1], color="tab:green", linewidth=0.8, label="true path")
         path = pd.DataFrame(drawing["trajectory"])
-        ax.plot(path[0], path[1], color="tab:blue", linewidth=0.8)
+        ax.plot(path[0], path[1], color="tab:blue", linewidth=0.8, label="FastSLAM mean path (aligned)")
         if drawing["landmarks"]:
             marks = pd.DataFrame(drawing["landmarks"])
-            ax.plot(marks[0], marks[1], "+", color="tab:purple", markersize=6)
+            ax.plot(marks[0], marks[1], "+", color="tab:purple", markersize=6, label="landmarks (aligned)")
         ax.set_aspect("equal")
         ax.set_xticks([])
         ax.set_yticks([])
         ax.set_title(", ".join(f"{short_name(k)}={row[k]}" for k in keys) + f"\nATE {row.ate_rmse:.3f} m", fontsize=8)
     for ax in list(axes.flat)[len(files):]:
         ax.axis("off")
-    fig.tight_layout()
+    handles, labels = axes.flat[0].get_legend_handles_labels()
+    fig.legend(handles, labels, loc="lower center", ncol=3, fontsize=8)
+    fig.suptitle(f"Final maps of seed {table.seed.min()}, one per grid cell (walls grey)", fontsize=10)
+    fig.tight_layout(rect=(0, 0.05, 1, 0.95))
     path = out_dir / "maps.png"
     fig.savefig(path, dpi=110)
     plt.close(fig)
