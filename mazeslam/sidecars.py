@@ -22,6 +22,7 @@ from pathlib import Path
 import numpy as np
 
 from mazeslam.beams import BeamGeometry
+from mazeslam.config import jsonable
 
 TRUTH_HEADER = "t,x,y,theta"
 MAP_FORMAT = "mazeslam-map"
@@ -113,7 +114,7 @@ def write_map(path: str | Path, walls, corners, sensor: dict, **extra) -> None:
         "sensor": sensor,
         **extra,
     }
-    text = json.dumps(document, indent=1, default=_json_default)
+    text = json.dumps(jsonable(document), indent=1, allow_nan=False)
     # One line per innermost list (a wall, a corner) keeps the file short and readable.
     text = re.sub(r"\[([^\[\]{}\"]*)\]", lambda m: "[" + " ".join(m.group(1).split()) + "]", text)
     Path(path).write_text(text + "\n")
@@ -138,11 +139,3 @@ def beam_geometry(sensor: dict) -> BeamGeometry:
     """The ``BeamGeometry`` recorded in a map sidecar's ``sensor`` section."""
     keys = ("first_beam_angle", "direction", "field_of_view", "mount_x", "mount_y")
     return BeamGeometry(**{key: sensor[key] for key in keys if key in sensor})
-
-
-def _json_default(value):
-    if isinstance(value, np.ndarray):
-        return value.tolist()
-    if isinstance(value, np.generic):
-        return value.item()
-    raise TypeError(f"{type(value).__name__} is not JSON serialisable")

@@ -215,11 +215,11 @@ def execute_run(sweep: Sweep, run: dict, maps_folder: str | None = None) -> dict
     }
     if maps_folder is not None:
         aligned_landmarks = apply_se2(score.alignment, result.landmarks) if len(result.landmarks) else result.landmarks
-        Path(maps_folder, f"{row['run_id']}.json").write_text(json.dumps({
-            "landmarks": aligned_landmarks.tolist(), "walls": loaded.walls.tolist(),
-            "corners": loaded.true_corners.tolist(),
-            "trajectory": apply_se2(score.alignment, result.mean_poses)[:, :2].round(5).tolist(),
-            "truth": loaded.truth[:, :2].round(5).tolist()}))
+        document = {"landmarks": aligned_landmarks.tolist(), "walls": loaded.walls.tolist(),
+                    "corners": loaded.true_corners.tolist(),
+                    "trajectory": apply_se2(score.alignment, result.mean_poses)[:, :2].round(5).tolist(),
+                    "truth": loaded.truth[:, :2].round(5).tolist()}
+        Path(maps_folder, f"{row['run_id']}.json").write_text(json.dumps(document, allow_nan=False))
     return row
 
 
