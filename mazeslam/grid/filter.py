@@ -42,7 +42,7 @@ from mazeslam.filters.correlative import CorrelativeParams, LikelihoodGrid, corr
 from mazeslam.filters.motion import OdometryNoise, predict_relative
 from mazeslam.filters.resampling import effective_sample_size, normalized_weights, systematic_resample
 from mazeslam.filters.scan_matching import ScanMatchParams, laser_odometry, wheel_motion
-from mazeslam.geometry import compose, transform_points, wrap_angle
+from mazeslam.geometry import compose, relative, transform_points, wrap_angle
 from mazeslam.grid.matching import LikelihoodField, MatchParams, match_points, refine_pose
 from mazeslam.grid.occupancy import GridParams, TiledGrid, integrate_scan, scan_rays
 from mazeslam.log import CourseLog
@@ -66,10 +66,14 @@ class GridSlamParams:
         resample_threshold: resample when the effective sample size is below this fraction.
         observation_gain: log weights are divided by this times the particle count (gmapping's
             obsSigmaGain), as the beams of a scan are far from independent.
-        window_margin: the map window read around a scan's reach, m (bounds the match's shift).
+        window_margin: the map window read around a scan's reach, and the likelihood field around
+            its matched end points, m (bounds the match's shift).
         rescue: the correlative search run when a refinement fails; rescue_sigma (m, rad) its
             window's standard deviation in position and heading (it reaches ``rescue.window_sigmas``
             of them) and the refinements' prior from its candidates.
+        map_corrected_motion: before the particles move, the motion is corrected by matching the
+            scan against the best particle's map (once per scan; rescue_below and rescue_gain:
+            see ``GridSlam._map_corrected_motion``).
         laser_odometry: the laser odometry giving the motion, or None for the log's odometry records.
     """
 
@@ -87,7 +91,10 @@ class GridSlamParams:
     window_margin: float = 1.5
     rescue: CorrelativeParams = field(default_factory=lambda: CorrelativeParams(
         resolution=0.1, sigma=0.1, turn_step=2.0, candidates=3, max_points=90))
-    rescue_sigma: tuple = (0.5, 0.35)
+    rescue_sigma: tuple = (0.8, 0.35)
+    map_corrected_motion: bool = True
+    rescue_below: float = 0.8
+    rescue_gain: float = 0.1
     laser_odometry: ScanMatchParams | None = field(default_factory=lambda: ScanMatchParams(enabled=True))
 
     def __post_init__(self):
@@ -152,6 +159,8 @@ class GridSlam:
         size before resampling and the resampling's indexes (None without resampling)."""
         rays = scan_rays(ranges, self.sensor.bearings, self.sensor.mount, self.params.grid)
         points = match_points(ranges, self.sensor.bearings, self.sensor.mount, self.params.match)
+        if self.params.map_corrected_motion:
+            motion = self._map_corrected_motion(motion, points)
         covariance = self.params.motion_covariance(motion)
         information = np.linalg.inv(covariance)
         log_etas, matched = np.zeros(len(self.poses)), 0
@@ -160,7 +169,8 @@ class GridSlam:
             reach = np.vstack([transform_points(predicted, rays.reach), predicted[:2]])
             window = grid.window(*grid.tile_range(reach, self.params.window_margin))
             if grid.tiles and len(points) >= 3:
-                field = LikelihoodField(window, self.params.match)
+                field = LikelihoodField(window.crop(transform_points(predicted, points), self.params.window_margin),
+                                        self.params.match)
                 if field.has_occupied:
                     pose, log_etas[index], accepted = self._propose(field, points, predicted, information)
                     if not accepted:
@@ -186,10 +196,7 @@ class GridSlam:
         accepted = field.overlap(mode, points, match) >= match.min_overlap
         centre = mode if accepted else predicted
         stencil = centre + STENCIL * self.params.kernel_step
-        offsets = stencil - predicted
-        offsets[:, 2] = wrap_angle(offsets[:, 2])
-        log_tau = field.log_likelihood(stencil, points, match) - 0.5 * np.einsum(
-            "ki,ij,kj->k", offsets, information, offsets)
+        log_tau = field.objective(stencil, points, predicted, information, match)
         log_eta = float(logsumexp(log_tau))
         if not accepted:
             return centre, log_eta, False
@@ -202,14 +209,40 @@ class GridSlam:
         return pose, log_eta, True
 
     def _rescue(self, field: LikelihoodField, points: np.ndarray, predicted: np.ndarray) -> np.ndarray:
-        """The most likely pose (3,) of the refinements seeded by a correlative search around
-        ``predicted`` (3,) over the particle's occupied cells."""
+        """The best pose (3,) of the refinements seeded by ``predicted`` (3,) and by a correlative
+        search around it over the particle's occupied cells, by likelihood times the rescue prior."""
         covariance = self.params.rescue_covariance
         grid = LikelihoodGrid(field.occupied_points(), self.params.rescue)
-        seeds = correlative_candidates(grid, points, predicted, covariance, self.params.rescue)
+        seeds = np.vstack([predicted, correlative_candidates(grid, points, predicted, covariance, self.params.rescue)])
         information = np.linalg.inv(covariance)
-        refined = np.array([refine_pose(field, points, seed, information, self.params.match) for seed in seeds])
-        return refined[np.argmax(field.log_likelihood(refined, points, self.params.match))]
+        refined = np.array([refine_pose(field, points, predicted, information, self.params.match, seed)
+                            for seed in seeds])
+        return refined[np.argmax(field.objective(refined, points, predicted, information, self.params.match))]
+
+    def _map_corrected_motion(self, motion: np.ndarray, points: np.ndarray) -> np.ndarray:
+        """``motion`` (3,) corrected by matching the scan's ``points`` against the best particle's
+        map (the laser odometry fails by decimetres where a scan alone is ambiguous, the map
+        less often): when the refinement from the motion leaves more than ``1 - rescue_below`` of
+        the points away from walls, the rescue search runs, and its pose replaces the motion's if
+        it puts ``rescue_gain`` more of the points on walls."""
+        best = self.best_particle()
+        grid, predicted = self.maps[best], compose(self.poses[best], motion)
+        if not grid.tiles or len(points) < 3:
+            return motion
+        world = transform_points(predicted, points)
+        window = grid.window(*grid.tile_range(world, self.params.window_margin + 2 * self.params.rescue_sigma[0]))
+        field = LikelihoodField(window, self.params.match)
+        if not field.has_occupied:
+            return motion
+        match = self.params.match
+        local = refine_pose(field, points, predicted, np.linalg.inv(self.params.motion_covariance(motion)), match)
+        local_overlap = field.overlap(local, points, match)
+        if local_overlap >= self.params.rescue_below:
+            return motion
+        pose = self._rescue(field, points, predicted)
+        if field.overlap(pose, points, match) < max(match.min_overlap, local_overlap + self.params.rescue_gain):
+            return motion
+        return relative(self.poses[best], pose)
 
     def _resample_if_needed(self) -> np.ndarray | None:
         """Systematic resampling when the effective sample size is low: the kept indexes, or None."""

@@ -100,6 +100,14 @@ class LikelihoodField:
         distance, _ = self.lookup(world)
         return params.scale * np.log(np.exp(-0.5 * (distance / params.sigma) ** 2) + params.floor).sum(axis=-1)
 
+    def objective(self, poses: np.ndarray, points: np.ndarray, prior: np.ndarray, prior_information: np.ndarray,
+                  params: MatchParams) -> np.ndarray:
+        """``log p(z | m, x)`` plus the Gaussian prior's log density (up to a constant) at ``poses`` (K, 3)."""
+        offsets = poses - prior
+        offsets[:, 2] = wrap_angle(offsets[:, 2])
+        penalty = 0.5 * np.einsum("ki,ij,kj->k", offsets, prior_information, offsets)
+        return self.log_likelihood(poses, points, params) - penalty
+
     def overlap(self, pose: np.ndarray, points: np.ndarray, params: MatchParams) -> float:
         """Fraction of ``points`` (N, 2) (robot frame) within ``overlap_distance`` of an occupied cell."""
         distance, _ = self.lookup(transform_points(pose, points))
@@ -115,15 +123,15 @@ def match_points(ranges: np.ndarray, bearings: np.ndarray, mount: np.ndarray, pa
 
 
 def refine_pose(field: LikelihoodField, points: np.ndarray, prior: np.ndarray, prior_information: np.ndarray,
-                params: MatchParams) -> np.ndarray:
+                params: MatchParams, start: np.ndarray | None = None) -> np.ndarray:
     """The pose (3,) maximising the likelihood of ``points`` (N, 2) (robot frame) times the Gaussian
-    motion prior (mean ``prior`` (3,), information (3, 3)), from ``prior``.
+    motion prior (mean ``prior`` (3,), information (3, 3)), from ``start`` (default ``prior``).
 
     Each stage of ``sigma_schedule`` runs ``iterations`` Gauss-Newton steps on the residuals
     ``d_i`` weighted by ``rho'(d_i) / d_i`` of ``rho(d) = -log(exp(-d^2 / (2 s^2)) + floor)``: points
     near a wall weigh ``1 / s^2``, points far from all walls nothing.
     """
-    pose = np.array(prior, dtype=float)
+    pose = np.array(prior if start is None else start, dtype=float)
     for sigma in params.sigma_schedule:
         for _ in range(params.iterations):
             cos_t, sin_t = np.cos(pose[2]), np.sin(pose[2])
