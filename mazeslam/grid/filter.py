@@ -44,7 +44,7 @@ from mazeslam.filters.resampling import effective_sample_size, normalized_weight
 from mazeslam.filters.scan_matching import ScanMatchParams, laser_odometry, wheel_motion
 from mazeslam.geometry import compose, relative, transform_points, wrap_angle
 from mazeslam.grid.matching import LikelihoodField, MatchParams, match_points, refine_pose
-from mazeslam.grid.occupancy import GridParams, TiledGrid, integrate_scan, scan_rays
+from mazeslam.grid.occupancy import GridParams, TiledGrid, distinct_tile_bytes, integrate_scan, scan_rays
 from mazeslam.log import CourseLog
 
 
@@ -283,6 +283,8 @@ class GridSlamResult:
         resampled: (S,) the particles were resampled after the scan.
         grid: the final best particle's map.
         seconds: (S,) wall-clock seconds of each scan; motion_seconds the laser odometry's.
+        peak_map_bytes: the most bytes of cells all particles' maps held together after a scan
+            (shared tiles counted once).
         particles: the final cloud (for inspection).
     """
 
@@ -298,6 +300,7 @@ class GridSlamResult:
     grid: TiledGrid
     seconds: np.ndarray
     motion_seconds: float
+    peak_map_bytes: int
     particles: GridSlam
 
     @property
@@ -343,7 +346,7 @@ def run_grid_slam(course_log: CourseLog, geometry: BeamGeometry, start_pose, par
     mean_poses, covariances = np.empty((count, 3)), np.empty((count, 3, 3))
     processed, resampled = np.zeros(count, bool), np.zeros(count, bool)
     matched, neff, seconds = np.full(count, np.nan), np.full(count, float(particles)), np.empty(count)
-    pending = np.zeros(3)
+    pending, peak_map_bytes = np.zeros(3), 0
     for index in tqdm(range(count), desc="grid SLAM", unit="scan", disable=not progress):
         started = time.perf_counter()
         pending = compose(pending, motions[index])
@@ -351,6 +354,7 @@ def run_grid_slam(course_log: CourseLog, geometry: BeamGeometry, start_pose, par
         if index == 0 or np.hypot(*pending[:2]) >= params.linear_update or abs(pending[2]) >= params.angular_update:
             matched[index], neff[index], indexes = slam.process(course_log.values[records[index]], pending)
             processed[index], pending = True, np.zeros(3)
+            peak_map_bytes = max(peak_map_bytes, distinct_tile_bytes(slam.maps))
             if indexes is not None:
                 parents, resampled[index] = indexes, True
         node_poses[index], mean_poses[index], covariances[index] = slam.cloud(pending)
@@ -359,7 +363,7 @@ def run_grid_slam(course_log: CourseLog, geometry: BeamGeometry, start_pose, par
     best = slam.best_particle()
     return GridSlamResult(records, course_log.times[records], _backtrack(node_poses, node_parents, best), mean_poses,
                           covariances, processed, matched, neff, resampled, slam.maps[best], seconds, motion_seconds,
-                          slam)
+                          peak_map_bytes, slam)
 
 
 def _backtrack(node_poses: np.ndarray, node_parents: np.ndarray, particle: int) -> np.ndarray:
