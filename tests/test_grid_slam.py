@@ -4,9 +4,12 @@ biased wheel odometry; the filter must close the loop with a map that matches th
 import numpy as np
 import pytest
 
+from mazeslam.config import from_mapping
 from mazeslam.evaluation.metrics import absolute_trajectory_error, align_se2, apply_se2
 from mazeslam.filters.motion import dead_reckoning
+from mazeslam.geometry import relative
 from mazeslam.grid import GridSlamParams, run_grid_slam
+from mazeslam.grid.filter import scan_motions
 from mazeslam.grid.map_io import OCCUPIED, grid_states
 from mazeslam.grid.synthetic import building_walls, simulate_building_log
 from mazeslam.log import read
@@ -56,3 +59,13 @@ def test_the_trajectory_has_a_row_per_record(building):
     np.testing.assert_allclose(poses[result.scan_records], result.best_poses)
     np.testing.assert_allclose(poses[0], simulated.start_pose)  # before the first scan
     assert result.processed[0] and result.processed.sum() < len(result.processed) + 1
+
+
+def test_the_settings_load_from_a_toml_section_and_the_wheels_give_the_motion(building):
+    simulated, course_log, _ = building
+    params = from_mapping(GridSlamParams, {"particles": 5, "motion": "wheels", "grid": {"resolution": 0.1},
+                                           "laser_odometry": {"enabled": True}}, "[grid]")
+    assert params.grid.resolution == 0.1 and params.laser_odometry.enabled
+    motions = scan_motions(course_log, simulated.geometry, params)
+    chained = dead_reckoning(course_log, simulated.start_pose)[np.flatnonzero(course_log.is_scan)]
+    np.testing.assert_allclose(relative(chained[:-1], chained[1:]), motions[1:], atol=1e-9)

@@ -74,7 +74,8 @@ class GridSlamParams:
         map_corrected_motion: before the particles move, the motion is corrected by matching the
             scan against the best particle's map (once per scan; rescue_below and rescue_gain:
             see ``GridSlam._map_corrected_motion``).
-        laser_odometry: the laser odometry giving the motion, or None for the log's odometry records.
+        motion: "laser": the motion between scans is the laser odometry's (settings
+            ``laser_odometry``, ``[scan_matching]``); "wheels": the log's odometry records chained.
     """
 
     particles: int = 30
@@ -95,12 +96,14 @@ class GridSlamParams:
     map_corrected_motion: bool = True
     rescue_below: float = 0.8
     rescue_gain: float = 0.1
-    laser_odometry: ScanMatchParams | None = field(default_factory=lambda: ScanMatchParams(enabled=True))
+    motion: str = "laser"
+    laser_odometry: ScanMatchParams = field(default_factory=lambda: ScanMatchParams(enabled=True))
 
     def __post_init__(self):
         object.__setattr__(self, "kernel_step", tuple(self.kernel_step))
         object.__setattr__(self, "rescue_sigma", tuple(self.rescue_sigma))
         require(self.particles >= 1, "particles must be at least 1")
+        require(self.motion in ("laser", "wheels"), f'motion must be "laser" or "wheels", got {self.motion!r}')
         require(self.linear_update >= 0 and self.angular_update >= 0, "update thresholds must be >= 0")
         require(len(self.kernel_step) == 3 and all(s > 0 for s in self.kernel_step), "kernel_step: 3 positive steps")
         require(0 <= self.resample_threshold <= 1, "resample_threshold must be a fraction")
@@ -324,8 +327,8 @@ class GridSlamResult:
 
 def scan_motions(course_log: CourseLog, geometry: BeamGeometry, params: GridSlamParams) -> np.ndarray:
     """The motion (S, 3) before each scan (robot frame of the previous scan; the first from the
-    start pose): the laser odometry's, or the chained odometry records without it."""
-    if params.laser_odometry is not None:
+    start pose): the laser odometry's, or the chained odometry records (``params.motion``)."""
+    if params.motion == "laser":
         return laser_odometry(course_log, geometry, params.laser_odometry).increments
     records = np.flatnonzero(course_log.is_scan)
     previous = np.r_[-1, records[:-1]]
