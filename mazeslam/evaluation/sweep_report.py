@@ -37,10 +37,10 @@ PLOTTED = [("ate_rmse", "ATE RMSE [mm]", {}, False),
 #: Axis labels (with units) of the settings sweeps vary, by their short name.
 SETTING_LABELS = {
     "NPARTICLES": "number of particles", "version": "FastSLAM version", "beams": "scan points N (beams over 360 deg)",
-    "mode": "landmarks", "sigmaR+sigmaB": "assumed sensor noise sigmaR [m] / sigmaB [rad]",
-    "sigmaX+sigmaTH+sigmaTH_drive": "assumed odometry noise sigmaX [m/sqrt(m)] / sigmaTH [rad/sqrt(rad)] / "
-                                    "sigmaTH_drive [rad/sqrt(m)]",
-    "observation_scale": "observation_scale (x the corners' calibrated covariance)",
+    "mode": "landmarks", "sigmaR+sigmaB": "assumed sensor noise sigmaR / sigmaB\n(m, rad)",
+    "sigmaX+sigmaTH+sigmaTH_drive": "assumed odometry noise sigmaX / sigmaTH / sigmaTH_drive\n"
+                                    "(m/sqrt(m), rad/sqrt(rad), rad/sqrt(m))",
+    "observation_scale": "observation_scale\n(x the corners' calibrated covariance)",
     "inflation": "inflation (x every noise variance)", "range_noise_std": "laser range noise [m]",
 }
 
@@ -141,7 +141,7 @@ def _plot_against(table: pd.DataFrame, key: str, others: list[str], out_dir: Pat
                         va="bottom")
         ax.set_ylabel(title, fontsize=9)
         ax.set_title(title.replace(" (log)", ""), fontsize=10)
-        ax.set_xlabel(SETTING_LABELS.get(short_name(key), short_name(key)), fontsize=8)
+        ax.set_xlabel(SETTING_LABELS.get(short_name(key), short_name(key)), fontsize=7)
         if log:
             ax.set_yscale("log")
         elif not metric.startswith("optimum"):
