@@ -1,9 +1,10 @@
-# The two set-up commands of the README. Each creates .venv and installs mazeslam into it first.
+# The two set-up commands of the README (demo, test), and lint. Each creates .venv and installs
+# mazeslam into it first.
 PYTHON ?= python3
 VENV := .venv
 BIN := $(VENV)/bin
 
-.PHONY: demo test bench install
+.PHONY: demo test lint bench install
 
 $(BIN)/mazeslam: pyproject.toml
 	$(PYTHON) -m venv $(VENV)
@@ -18,6 +19,14 @@ demo: install
 
 test: install
 	$(BIN)/pytest -n auto
+
+# ruff (lint, then formatting) and mypy, configured in pyproject.toml.
+LINTED := mazeslam tests benchmarks examples experiments
+
+lint: install
+	$(BIN)/ruff check $(LINTED)
+	$(BIN)/ruff format --check $(LINTED)
+	$(BIN)/mypy
 
 bench: install
 	$(BIN)/python benchmarks/run_all.py

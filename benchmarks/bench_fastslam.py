@@ -16,7 +16,6 @@ import time
 import tracemalloc
 from pathlib import Path
 
-
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
 
 from reference_fastslam import LoopFastSLAM  # noqa: E402

@@ -47,7 +47,8 @@ def run() -> list[dict]:
     return [{"benchmark": "laser odometry, aces (wheel prior)", "value": factor, "unit": "x real time",
              "target": TARGET_REAL_TIME, "met": factor >= TARGET_REAL_TIME},
             {"benchmark": "laser odometry, orebro (no odometry: correlative search)", "value": blind_rate,
-             "unit": "scans/s", "target": TARGET_BLIND_SCANS_PER_SECOND, "met": blind_rate >= TARGET_BLIND_SCANS_PER_SECOND}]
+             "unit": "scans/s", "target": TARGET_BLIND_SCANS_PER_SECOND,
+             "met": blind_rate >= TARGET_BLIND_SCANS_PER_SECOND}]
 
 
 if __name__ == "__main__":

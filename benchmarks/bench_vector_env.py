@@ -12,10 +12,9 @@ from __future__ import annotations
 import time
 
 import gymnasium as gym
-import numpy as np
+from bench_env import irsim_rate
 
 import mazeslam  # noqa: F401  (registers the environments)
-from bench_env import irsim_rate
 from mazeslam.envs.maze import generate_maze
 
 ROWS = COLS = 16

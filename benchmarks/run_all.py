@@ -15,9 +15,9 @@ import bench_env  # noqa: E402
 import bench_fastslam  # noqa: E402
 import bench_laser  # noqa: E402
 import bench_scan_matching  # noqa: E402
+import bench_simulation  # noqa: E402
 import bench_sweep  # noqa: E402
 import bench_vector_env  # noqa: E402
-import bench_simulation  # noqa: E402
 
 
 def main() -> int:

@@ -103,15 +103,17 @@ def main():
         env = RecordCourseLog(env, args.record)
     observation, info = env.reset(seed=args.seed)
     agent = FrontierAgent(env)
-    total = 0.0
-    for step in range(args.steps):
+    total, steps_taken = 0.0, 0
+    for _ in range(args.steps):
         observation, reward, terminated, truncated, info = env.step(agent(observation, info))
+        steps_taken += 1
         total += reward
         if terminated or truncated:
             break
     env.close()
-    print(f"frontier agent: {step + 1} steps ({info['time']:.0f} s), reward {total:.1f}, cells visited "
-          f"{info['visited']:.0%}, walls seen {info['coverage']:.0%}" + (f"; log: {args.record}" if args.record else ""))
+    print(f"frontier agent: {steps_taken} steps ({info['time']:.0f} s), reward {total:.1f}, cells visited "
+          f"{info['visited']:.0%}, walls seen {info['coverage']:.0%}"
+          + (f"; log: {args.record}" if args.record else ""))
 
 
 if __name__ == "__main__":

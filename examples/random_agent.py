@@ -18,14 +18,15 @@ def main():
     env = gym.make("mazeslam/Maze-v0", max_steps=args.steps)
     env.action_space.seed(args.seed)
     observation, info = env.reset(seed=args.seed)
-    total, collisions = 0.0, 0
-    for step in range(args.steps):
+    total, collisions, steps_taken = 0.0, 0, 0
+    for _ in range(args.steps):
         observation, reward, terminated, truncated, info = env.step(env.action_space.sample())
+        steps_taken += 1
         total += reward
         collisions += info["collision"]
         if terminated or truncated:
             break
-    print(f"random agent: {step + 1} steps, reward {total:.1f}, cells visited {info['visited']:.0%}, "
+    print(f"random agent: {steps_taken} steps, reward {total:.1f}, cells visited {info['visited']:.0%}, "
           f"walls seen {info['coverage']:.0%}, steps touching a wall {collisions}")
 
 

@@ -62,7 +62,10 @@ def train(envs, generations: int, sigma: float = 0.5, learning_rate: float = 0.2
         noise = rng.standard_normal((pairs, SECTORS + 1, 2))
         population = weights + sigma * np.concatenate([noise, -noise])  # env k and k + pairs: a pair
         maze_seeds = 1000 * (generation + 1) + np.tile(np.arange(pairs), 2)
-        returns, _ = episodes(envs, lambda observation: act(population, observation, max_range), maze_seeds)
+        def policy(observation, population=population):
+            return act(population, observation, max_range)
+
+        returns, _ = episodes(envs, policy, maze_seeds)
         advantage = returns[:pairs] - returns[pairs:]
         weights = weights + learning_rate / (2 * pairs * sigma) * np.einsum("p,pfa->fa",
                                                                            advantage / (advantage.std() + 1e-8), noise)

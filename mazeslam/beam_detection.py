@@ -122,7 +122,8 @@ def _scan_pairs(course_log: log.CourseLog, mount_x: float, jump_tolerance: float
             if shortest <= math.hypot(motion[0], motion[1]) <= longest:
                 pairs.append(((a, b), motion))
     pairs.sort(key=lambda p: -math.hypot(p[1][0], p[1][1]))
-    chosen, uses = [], {}
+    chosen = []
+    uses: dict[int, int] = {}
     for (a, b), motion in pairs:
         if uses.get(a, 0) < 2 and uses.get(b, 0) < 2:
             chosen.append(((a, b), motion))
@@ -152,9 +153,11 @@ def describe(detection: Detection) -> list[str]:
     """Lines that report a detection."""
     best, runner_up = detection.best, detection.runner_up
     return [
-        f"beam convention detected from {detection.pairs} pairs of scans (median distance between matched points; lower is better):",
+        f"beam convention detected from {detection.pairs} pairs of scans "
+        "(median distance between matched points; lower is better):",
         f"  best        beam 0 at {math.degrees(best.first_beam_angle):+7.1f} deg ({best.first_beam_angle:+.4f} rad), "
         f"direction {best.direction:+d}: {1000 * best.score:.2f} mm",
-        f"  runner-up   beam 0 at {math.degrees(runner_up.first_beam_angle):+7.1f} deg, direction {runner_up.direction:+d}: "
+        f"  runner-up   beam 0 at {math.degrees(runner_up.first_beam_angle):+7.1f} deg, "
+        f"direction {runner_up.direction:+d}: "
         f"{1000 * runner_up.score:.2f} mm (margin x{detection.margin:.2f})",
     ]

@@ -43,7 +43,8 @@ def main():
 def simulate(out, seed, maze, rows, cols, duration, beams, config_path, commands_path, plot_path, quiet):
     """Drive the simulated e-puck through a maze and write a course log with truth and map sidecars."""
     from mazeslam.envs.policies import load_commands
-    from mazeslam.envs.simulator import load_config, simulate as run_simulation
+    from mazeslam.envs.simulator import load_config
+    from mazeslam.envs.simulator import simulate as run_simulation
 
     config = _with_overrides(load_config(config_path), rows=rows, cols=cols, beams=beams)
     policy = load_commands(commands_path) if commands_path else None
@@ -277,7 +278,8 @@ def record(out, port, camera, sim, maze, seed, beams, scan_period, odometry_rate
                        scan_period=scan_period, odometry_rate=odometry_rate, center=center,
                        inner_radius=inner_radius, outer_radius=outer_radius, height=height, alpha=alpha,
                        threshold=threshold, script=script, duration=duration,
-                       geometry_overrides=dataclasses.asdict(_geometry_overrides(first_beam_angle, beam_direction, mount_x)))
+                       geometry_overrides=dataclasses.asdict(
+                           _geometry_overrides(first_beam_angle, beam_direction, mount_x)))
     click.echo("\n".join(lines))
 
 
@@ -343,7 +345,8 @@ def odometry_noise(log_file, config_path):
     config = load_slam_config(config_path)
     run = load_run(log_file, config.sensor)
     if run.truth is None:
-        raise click.ClickException(f"{log_file}: no truth sidecar {run.name}.truth.csv: the noise is measured against it")
+        raise click.ClickException(
+            f"{log_file}: no truth sidecar {run.name}.truth.csv: the noise is measured against it")
     truth_file = f"{run.name}.truth.csv"
     laser = laser_odometry(run.log, run.geometry, config.scan_matching) if config.scan_matching.enabled else None
     source = "laser odometry" if laser is not None else "odometry"

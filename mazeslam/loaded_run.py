@@ -16,6 +16,7 @@ import numpy as np
 
 from mazeslam import log, sidecars
 from mazeslam.beams import EXERCISE_CONVENTION, BeamGeometry, SensorOverrides
+from mazeslam.log import CourseLog
 
 
 @dataclass(frozen=True)
@@ -33,7 +34,7 @@ class LoadedRun:
     """
 
     path: Path
-    log: log.CourseLog
+    log: CourseLog
     geometry: BeamGeometry
     geometry_origin: str
     start_pose: np.ndarray
@@ -75,7 +76,7 @@ class LoadedRun:
         distance = np.abs(self.log.increments[:, 0])
         return np.flatnonzero(self.log.is_odometry & (distance > jump_tolerance))
 
-    def log_without_glitches(self, jump_tolerance: float) -> log.CourseLog:
+    def log_without_glitches(self, jump_tolerance: float) -> CourseLog:
         """The log with the glitches' odometry (``glitches``) set to no motion, as the filter moves."""
         values = self.log.values.copy()
         values[self.glitches(jump_tolerance), :2] = 0.0

@@ -23,9 +23,10 @@ from __future__ import annotations
 
 import math
 from collections import Counter
+from collections.abc import Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Iterator, NamedTuple
+from typing import NamedTuple
 
 import numpy as np
 
@@ -54,20 +55,22 @@ class SkippedLine:
 
 
 class OdometryRecord(NamedTuple):
-    index: int  # record number in the log, from 0
+    # Record number in the log, from 0. The field shadows tuple.index (a method) on purpose: the
+    # name is the log's own, used across the package and the experiments.
+    index: int  # type: ignore[assignment]
     t: float  # seconds
     distance: float  # dX, metres travelled since the previous odometry record
     turn: float  # dTheta, radians turned since the previous odometry record
 
 
 class ScanRecord(NamedTuple):
-    index: int
+    index: int  # type: ignore[assignment]  # shadows tuple.index, as in OdometryRecord
     t: float
     ranges: np.ndarray  # (N,) metres, 0 = no return
 
 
 class LandmarkRecord(NamedTuple):
-    index: int
+    index: int  # type: ignore[assignment]  # shadows tuple.index, as in OdometryRecord
     t: float
     landmark: int  # identity, -1 if unknown
     range: float  # metres, robot frame
@@ -244,7 +247,8 @@ def _check_line(parts: list[str], width: int, previous_time: float, first_line: 
             return None, f"landmark range {parts[3]} is not positive"
         wrong = next((c for c, v in enumerate(values[5:], 6) if v != PADDING), None)
         if wrong is not None:
-            return None, f"landmark record is not padded with -1 after id, range and bearing (column {wrong} is {parts[wrong - 1]})"
+            return None, ("landmark record is not padded with -1 after id, range and bearing "
+                          f"(column {wrong} is {parts[wrong - 1]})")
     else:
         return None, f"flag {parts[1]} is not 0 (odometry), 1 (scan) or 2 (landmark)"
     if t < previous_time:

@@ -103,17 +103,26 @@ class VectorOnlineFastSLAM(gym.vector.VectorWrapper):
             if self._ended[env]:
                 self._start(env, observation["scan"][env])
             else:
-                self.episodes[env].update(observation["scan"][env], observation["odometry"][env])
+                self._episode(env).update(observation["scan"][env], observation["odometry"][env])
         self._ended = terminated | truncated
         info["slam"] = self._estimates()
         return observation, reward, terminated, truncated, info
 
     def _start(self, env: int, scan) -> None:
-        self.episodes[env] = EpisodeSLAM(self.env.unwrapped.sub_env(env), self.params, self.corner_params)
-        self.episodes[env].update(scan)
+        from mazeslam.envs.vector_env import maze_vector_env
+
+        episode = EpisodeSLAM(maze_vector_env(self.env).sub_env(env), self.params, self.corner_params)
+        self.episodes[env] = episode
+        episode.update(scan)
+
+    def _episode(self, env: int) -> EpisodeSLAM:
+        episode = self.episodes[env]
+        if episode is None:
+            raise RuntimeError(f"env {env} has no episode: reset() it first")
+        return episode
 
     def _estimates(self) -> dict:
-        estimates = [episode.estimate() for episode in self.episodes]
+        estimates = [self._episode(env).estimate() for env in range(self.num_envs)]
         stacked = {key: np.array([estimate[key] for estimate in estimates])
                    for key in ("pose", "pose_covariance", "particles", "effective_sample_size")}
         landmarks = np.empty(self.num_envs, dtype=object)

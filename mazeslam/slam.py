@@ -53,12 +53,12 @@ class SlamResult:
     landmarks: np.ndarray
     landmark_covariances: np.ndarray
     step_seconds: np.ndarray
+    filter: FastSLAM
+    pose_covariances: np.ndarray
     reports: list[UpdateReport] = field(default_factory=list)
     resamplings: int = 0
-    filter: FastSLAM | None = None
     snapshots: list = field(default_factory=list)
     dropped_odometry: list = field(default_factory=list)
-    pose_covariances: np.ndarray | None = None
     laser_odometry: LaserOdometry | None = None
 
     @property
@@ -99,6 +99,7 @@ def run_fastslam(course_log: log.CourseLog, params: FastSLAMParams | None = None
     while position < count:
         record = records[position]
         started = time.perf_counter()
+        done: list[log.OdometryRecord | log.ScanRecord | log.LandmarkRecord]
         if isinstance(record, log.OdometryRecord):
             if laser is None:  # else the laser odometry's increment at the next scan holds this motion
                 if abs(record.distance) > jump_tolerance:
@@ -111,14 +112,16 @@ def run_fastslam(course_log: log.CourseLog, params: FastSLAMParams | None = None
                 if laser is not None:
                     slam.predict_relative(laser_increments[record.index])
                 done = [record]
+                assert extractor is not None  # a log with scan records has beams
                 z, covariances, facings = _scan_observations(extractor, record)
                 ids = None
                 if identify is not None:
                     ids = identify(record.index, z)
             else:  # landmark observations: all those taken at one time update together
-                done = _same_time_landmarks(records, position)
-                z = np.array([[r.range, r.bearing] for r in done])
-                covariances, ids, facings = None, np.array([r.landmark for r in done]), None
+                group = _same_time_landmarks(records, position)
+                done = list(group)
+                z = np.array([[r.range, r.bearing] for r in group])
+                covariances, ids, facings = None, np.array([r.landmark for r in group]), None
             reports.append(slam.update(z, covariances, ids if params.association == Association.KNOWN else None,
                                        facings))
             if snapshot_every and (len(reports) - 1) % snapshot_every == 0:
@@ -132,8 +135,9 @@ def run_fastslam(course_log: log.CourseLog, params: FastSLAMParams | None = None
         bar.update(len(done))
     bar.close()
     landmarks, covariances = slam.landmarks()
-    return SlamResult(course_log.times, mean_poses, best_poses, landmarks, covariances, step_seconds, reports,
-                      slam.resamplings, slam, snapshots, dropped, pose_covariances, laser)
+    return SlamResult(course_log.times, mean_poses, best_poses, landmarks, covariances, step_seconds,
+                      filter=slam, pose_covariances=pose_covariances, reports=reports, resamplings=slam.resamplings,
+                      snapshots=snapshots, dropped_odometry=dropped, laser_odometry=laser)
 
 
 def _scan_observations(extractor: CornerExtractor, record: log.ScanRecord):
@@ -142,9 +146,9 @@ def _scan_observations(extractor: CornerExtractor, record: log.ScanRecord):
     return features.observation_array(), features.observation_covariances(), features.observation_facings()
 
 
-def _same_time_landmarks(records: list, position: int) -> list:
-    """The landmark records from ``position`` on that share its timestamp."""
-    group = [records[position]]
+def _same_time_landmarks(records: list, position: int) -> list[log.LandmarkRecord]:
+    """The landmark records from ``position`` on (a landmark record) that share its timestamp."""
+    group: list[log.LandmarkRecord] = [records[position]]
     for record in records[position + 1:]:
         if not isinstance(record, log.LandmarkRecord) or record.t != group[0].t:
             break

@@ -10,8 +10,8 @@ from mazeslam import sidecars
 from mazeslam.beam_detection import convention_warning
 from mazeslam.beams import SensorOverrides
 from mazeslam.config import with_changes
-from mazeslam.evaluation.consistency import EXPLANATION, OBSERVATION_BOUND_95, POSE_BOUND_95, nis_summary
 from mazeslam.evaluation import slam_report
+from mazeslam.evaluation.consistency import EXPLANATION, OBSERVATION_BOUND_95, POSE_BOUND_95, nis_summary
 from mazeslam.evaluation.scoring import RPE_DISTANCE, score_run
 from mazeslam.loaded_run import LoadedRun, load_run
 from mazeslam.slam import SlamConfig, SlamResult, load_slam_config, slam_on_run
@@ -38,10 +38,12 @@ def run_slam_command(log_file, config_path, out_dir, filter_changes: dict | None
     lines = _run_lines(run, config, result, matching_seconds)
     score = score_run(run, result, config.evaluation.match_radius)
     nis = nis_summary(result.nis)
+    line_numbers = run.log.line_numbers
+    assert line_numbers is not None  # the log was read from a file: each record has its line
     extra = {"source": str(log_file), "beam_geometry": run.geometry.to_dict(), "start_pose": run.start_pose.tolist(),
              "parameters": dataclasses.asdict(config), "consistency": slam_report.consistency(result),
              "nis": nis, "resampled_fraction": result.resampled_fraction,
-             "dropped_odometry_lines": [int(run.log.line_numbers[r.index]) for r in result.dropped_odometry]}
+             "dropped_odometry_lines": [int(line_numbers[r.index]) for r in result.dropped_odometry]}
     lines += _uncertainty_lines(nis, score.nees_summary if score is not None else None)
     if score is not None:
         lines += _score_lines(run, result, score, config.evaluation.match_radius)
@@ -82,8 +84,9 @@ def _run_lines(run: LoadedRun, config: SlamConfig, result: SlamResult, matching_
              f"{len(result.landmarks)} landmarks in the best particle's map, {seconds:.2f} s" + speed]
     if result.laser_odometry is not None:
         laser = result.laser_odometry
-        lines.append(f"Laser odometry ({matching_seconds:.1f} s): {int(laser.accepted.sum())} of {len(laser.accepted) - 1} "
-                     "scan-to-scan matches accepted; intervals without odometry records (matched by correlative search): "
+        lines.append(f"Laser odometry ({matching_seconds:.1f} s): {int(laser.accepted.sum())} of "
+                     f"{len(laser.accepted) - 1} scan-to-scan matches accepted; "
+                     "intervals without odometry records (matched by correlative search): "
                      f"{int((~laser.had_odometry[1:]).sum())}")
     if not run.geometry_from_sidecar and course_log.is_scan.sum() > 1:
         warning = convention_warning(course_log, run.geometry, config.corners.min_range, config.corners.max_range,
@@ -91,9 +94,11 @@ def _run_lines(run: LoadedRun, config: SlamConfig, result: SlamResult, matching_
         if warning:
             lines.append(warning)
     if result.dropped_odometry:
+        line_numbers = course_log.line_numbers
+        assert line_numbers is not None  # the log was read from a file: each record has its line
         lines.append(f"left out {len(result.dropped_odometry)} odometry records travelling more than "
                      f"{config.odometry.jump_tolerance:g} m in one step (glitches): "
-                     + ", ".join(f"line {course_log.line_numbers[r.index]} (t {r.t:.3f} s, dX {r.distance:+.4f} m, "
+                     + ", ".join(f"line {line_numbers[r.index]} (t {r.t:.3f} s, dX {r.distance:+.4f} m, "
                                  f"dTheta {r.turn:+.4f} rad)" for r in result.dropped_odometry))
     checks = slam_report.consistency(result)
     lines.append(f"Map consistency: {checks['reobserved']} of {checks['landmarks']} landmarks re-observed "
@@ -119,7 +124,8 @@ def _uncertainty_lines(nis: dict, nees: dict | None) -> list[str]:
 
 def _score_lines(run: LoadedRun, result: SlamResult, score, match_radius: float) -> list[str]:
     """The error table against the truth and the map's errors."""
-    scored = "at the scans (laser odometry: no pose between scans)" if result.laser_odometry is not None else "at every record"
+    scored = ("at the scans (laser odometry: no pose between scans)" if result.laser_odometry is not None
+              else "at every record")
     lines = [f"Errors against {run.truth_label}, {scored}: ATE [m] (aligned: after the best rigid motion), RPE over "
              f"{RPE_DISTANCE} m of path [m, rad], NEES of the mean pose (consistent: 3):",
              score.table.to_markdown(floatfmt=".4f")]

@@ -113,7 +113,7 @@ def optimum_columns(run: LoadedRun, config: SlamConfig, score: RunScore) -> dict
     """The known-association optimum's ATE RMSE (m, as estimated and aligned) at the records the filter
     was scored at (``score.records``) and the filter's ratio to it (``optimum_ratio``,
     ``optimum_aligned_ratio``: 1 is as good as any estimator can be); None without ``has_known_optimum``."""
-    if not has_known_optimum(run):
+    if run.truth is None or not has_known_optimum(run):
         return None
     poses, truth = known_optimum(run, config).poses[score.records], run.truth[score.records]
     row = error_table({OPTIMUM: poses}, truth).loc[OPTIMUM]
@@ -158,7 +158,8 @@ def run_smooth_command(log_file, config_path, out_dir, association: str = "known
     """Smooth, write ``out_dir``/{trajectory.csv, trajectory.tum, map.json, smooth.png}; return the
     lines to print. ``association``: "known" (the truth's corners) or "from-run" (``run_dir``'s map)."""
     config = load_slam_config(config_path)
-    config = dataclasses.replace(config, sensor=with_changes(config.sensor, **dataclasses.asdict(sensor or SensorOverrides())))
+    sensor_changes = dataclasses.asdict(sensor or SensorOverrides())
+    config = dataclasses.replace(config, sensor=with_changes(config.sensor, **sensor_changes))
     run = load_run(log_file, config.sensor)
     radius = config.evaluation.match_radius
     if association == "known":
@@ -173,7 +174,8 @@ def run_smooth_command(log_file, config_path, out_dir, association: str = "known
     result = smoothed.result
     lines = [(f"{run.path}: {len(result.poses)} scan poses, {len(result.landmarks)} landmarks, "
               f"association {how}; beam geometry from {run.geometry_origin}"),
-             (f"Batch optimum: {result.iterations} iterations ({'converged' if result.converged else 'NOT converged'}), "
+             (f"Batch optimum: {result.iterations} iterations "
+              f"({'converged' if result.converged else 'NOT converged'}), "
               f"{smoothed.seconds:.2f} s; chi2 {result.chi2:.1f} over {result.dof} degrees of freedom, chi2/dof "
               f"{result.chi2_per_dof:.2f} (1: the noise model fits the residuals; below: it overstates the noise)")]
     document = {"frame": "world; metres", "source": str(log_file), "association": how,
@@ -182,7 +184,7 @@ def run_smooth_command(log_file, config_path, out_dir, association: str = "known
                 "chi2_per_dof": result.chi2_per_dof, "iterations": result.iterations, "converged": result.converged,
                 "scans": len(result.poses), "seconds": smoothed.seconds, "parameters": dataclasses.asdict(config)}
     if run.truth is not None:
-        errors, error_lines = _errors(run, smoothed, radius)
+        errors, error_lines = _errors(run, run.truth, smoothed, radius)
         document.update(errors)
         lines += error_lines
     else:
@@ -192,24 +194,27 @@ def run_smooth_command(log_file, config_path, out_dir, association: str = "known
     return lines
 
 
-def _errors(run: LoadedRun, smoothed: Smoothed, radius: float) -> tuple[dict, list[str]]:
-    """ATE at every record against dead reckoning, NEES at the scans, map errors: for map.json and to print."""
+def _errors(run: LoadedRun, truth: np.ndarray, smoothed: Smoothed, radius: float) -> tuple[dict, list[str]]:
+    """ATE at every record against dead reckoning, NEES at the scans, map errors against ``truth``
+    (``run.truth``): for map.json and to print."""
     result = smoothed.result
-    table = error_table({DEAD_RECKONING: dead_reckoning(run.log, run.start_pose), OPTIMUM: smoothed.poses}, run.truth)
+    table = error_table({DEAD_RECKONING: dead_reckoning(run.log, run.start_pose), OPTIMUM: smoothed.poses}, truth)
     nees = nees_summary(normalized_estimation_error(result.poses, result.pose_covariances,
-                                                    run.truth[result.scan_records]))
-    aligned = apply_se2(align_se2(smoothed.poses, run.truth), result.landmarks) if len(result.landmarks) else result.landmarks
+                                                    truth[result.scan_records]))
+    aligned = (apply_se2(align_se2(smoothed.poses, truth), result.landmarks) if len(result.landmarks)
+               else result.landmarks)
     map_errors = {"as estimated": map_error(result.landmarks, run.true_corners, radius),
                   "aligned": map_error(aligned, run.true_corners, radius)}
     lines = [(f"Errors against {run.truth_label} at every record: ATE [m] (aligned: after the best rigid motion), "
               "RPE [m, rad]:"), table.to_markdown(floatfmt=".4f"),
              f"Pose NEES at the {nees['count']} scans (consistent: 3): "
-             + (f"mean {nees['mean']:.2f}, median {nees['median']:.2f}, {100 * nees['inside_95']:.0f} % inside the 95 % bound"
+             + (f"mean {nees['mean']:.2f}, median {nees['median']:.2f}, "
+                f"{100 * nees['inside_95']:.0f} % inside the 95 % bound"
                 if nees["count"] else "undefined")]
     if len(run.true_corners):
         errors = map_errors["as estimated"]
-        lines.append(f"Map: {errors['matched']} landmarks within {radius:g} m of a true one, RMSE {errors['rmse']:.4f} m "
-                     f"(aligned {map_errors['aligned']['rmse']:.4f} m)")
+        lines.append(f"Map: {errors['matched']} landmarks within {radius:g} m of a true one, "
+                     f"RMSE {errors['rmse']:.4f} m (aligned {map_errors['aligned']['rmse']:.4f} m)")
     return {"ate": table.reset_index().to_dict(orient="records"), "nees": nees, "map_error": map_errors}, lines
 
 
@@ -220,7 +225,8 @@ def _write_outputs(out_dir: Path, run: LoadedRun, config: SlamConfig, smoothed: 
     sidecars.write_trajectory(paths["trajectory"], run.log.times, smoothed.poses, smoothed.covariances)
     sidecars.write_tum(paths["tum"], run.log.times, smoothed.poses)
     paths["map"].write_text(json.dumps(jsonable(document), indent=1, allow_nan=False) + "\n")
-    points = scan_points_world(run.log, smoothed.poses, run.geometry, config.corners.min_range, config.corners.max_range)
+    points = scan_points_world(run.log, smoothed.poses, run.geometry, config.corners.min_range,
+                               config.corners.max_range)
     paths["figure"] = plot_smoothed(out_dir / "smooth.png", run, smoothed, points)
     return paths
 
@@ -233,13 +239,15 @@ def plot_smoothed(path, run: LoadedRun, smoothed: Smoothed, points: np.ndarray) 
         ax.plot([x1, x2], [y1, y2], color="0.6", linewidth=1.0)
     if len(points):
         ax.plot(*points.T, ".", color="black", markersize=0.8, alpha=0.4, label="scan points")
-    paths = {"dead reckoning": (dead_reckoning(run.log, run.start_pose), "0.5"), "batch optimum": (smoothed.poses, "tab:blue")}
+    paths = {"dead reckoning": (dead_reckoning(run.log, run.start_pose), "0.5"),
+             "batch optimum": (smoothed.poses, "tab:blue")}
     if run.truth is not None:
         paths["reference path" if run.truth_is_reference else "true path"] = (run.truth, "tab:green")
     for label, (poses, colour) in paths.items():
         ax.plot(poses[:, 0], poses[:, 1], color=colour, linewidth=1.2, label=label)
     if len(run.true_corners):
-        ax.plot(*run.true_corners.T, "o", color="tab:green", markersize=4, markerfacecolor="none", label="true landmarks")
+        ax.plot(*run.true_corners.T, "o", color="tab:green", markersize=4, markerfacecolor="none",
+                label="true landmarks")
     result = smoothed.result
     for mean, covariance in zip(result.landmarks, result.landmark_covariances):
         ax.add_patch(_ellipse(mean, covariance))

@@ -33,7 +33,8 @@ def test_impossible_geometry_is_rejected(kwargs):
 
 
 def test_returns_are_placed_in_the_robot_frame_from_the_mount():
-    geometry = BeamGeometry(first_beam_angle=0.0, direction=1, mount_x=0.1, mount_y=0.02)  # 4 beams: 0, 90, 180, 270 deg
+    # 4 beams: 0, 90, 180, 270 deg
+    geometry = BeamGeometry(first_beam_angle=0.0, direction=1, mount_x=0.1, mount_y=0.02)
     points = geometry.returns(np.array([1.0, 0.0, 2.0, 5.0]), min_range=0.5, max_range=3.0)
     # beam 1 has no return, beam 3 is beyond max_range
     np.testing.assert_allclose(points, [[1.1, 0.02], [-1.9, 0.02]], atol=1e-12)

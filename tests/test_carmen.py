@@ -2,8 +2,8 @@ import gzip
 
 import numpy as np
 import pytest
-
 from conftest import PROJECT_ROOT, SHARED_DATA
+
 from mazeslam.config import load_toml
 from mazeslam.filters.corners import CornerExtractor, CornerParams
 from mazeslam.imports.carmen import front_laser, is_carmen, read_carmen
@@ -158,7 +158,8 @@ def test_laser_odometry_on_real_scans_beats_the_wheels(name, scans, tmp_path):
     course_log = dataclass_slice(run.log, 0, stop)
     reference = run.truth[:stop]
     start = run.start_pose
-    laser = laser_odometry(course_log, run.geometry, load_slam_config(PROJECT_ROOT / "configs" / "carmen.toml").scan_matching)
+    matching = load_slam_config(PROJECT_ROOT / "configs" / "carmen.toml").scan_matching
+    laser = laser_odometry(course_log, run.geometry, matching)
     at_scans = reference[laser.scan_records]
     wheels = absolute_trajectory_error(dead_reckoning(course_log, start)[laser.scan_records], at_scans)["rmse"]
     lasers = absolute_trajectory_error(laser.poses(start), at_scans)["rmse"]

@@ -3,8 +3,8 @@ import sys
 
 import pytest
 from click.testing import CliRunner
-
 from conftest import PROJECT_ROOT
+
 from mazeslam import log, sidecars
 from mazeslam.cli import main
 

@@ -6,9 +6,9 @@ import numpy as np
 import pytest
 
 from mazeslam import simulate
+from mazeslam.envs.laser import RayCaster
 from mazeslam.envs.simulator import MazeParams, SimulationConfig
 from mazeslam.evaluation.corner_quality import corner_faces, evaluate_log, observable_corners
-from mazeslam.envs.laser import RayCaster
 from mazeslam.filters.corners import CornerParams
 
 

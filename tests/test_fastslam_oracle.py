@@ -3,12 +3,12 @@
 import dataclasses
 
 import numpy as np
+from reference_fastslam import LoopFastSLAM
 
 from mazeslam import log
 from mazeslam.filters.corners import CornerExtractor
 from mazeslam.filters.fastslam import FastSLAM, FastSLAMParams
 from mazeslam.loaded_run import load_run
-from reference_fastslam import LoopFastSLAM
 
 
 def test_vectorised_update_equals_the_per_particle_loop(default_run):

@@ -7,8 +7,8 @@ import pytest
 
 from mazeslam.filters import ekf
 from mazeslam.filters.association import associate_greedy, associate_known
-from mazeslam.filters.proposals import MotionProposal, ObservationProposal
 from mazeslam.filters.motion import OdometryNoise
+from mazeslam.filters.proposals import MotionProposal, ObservationProposal
 from mazeslam.filters.resampling import effective_sample_size, normalized_weights, systematic_resample
 
 
@@ -106,9 +106,9 @@ def test_the_observation_proposal_weighs_by_the_joint_likelihood_of_the_scan():
     joint = -0.5 * (residual @ np.linalg.solve(joint_covariance, residual) + np.log(np.linalg.det(joint_covariance)))
     # Equal up to the linearisation at the corrected pose (second order in the small corrections).
     assert sequential == pytest.approx(joint, abs=0.05)
-    marginals = -0.5 * sum(residual[2 * k: 2 * k + 2] @ np.linalg.solve(joint_covariance[2 * k: 2 * k + 2, 2 * k: 2 * k + 2],
-                                                                          residual[2 * k: 2 * k + 2])
-                           + np.log(np.linalg.det(joint_covariance[2 * k: 2 * k + 2, 2 * k: 2 * k + 2])) for k in range(2))
+    blocks = [slice(2 * k, 2 * k + 2) for k in range(2)]
+    marginals = -0.5 * sum(residual[b] @ np.linalg.solve(joint_covariance[b, b], residual[b])
+                           + np.log(np.linalg.det(joint_covariance[b, b])) for b in blocks)
     assert abs(marginals - joint) > 10 * abs(sequential - joint)
 
 

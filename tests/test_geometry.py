@@ -2,8 +2,14 @@ import numpy as np
 import pytest
 
 from mazeslam.geometry import (
-    advance_pose, cartesian_to_polar, compose, inverse, polar_to_cartesian, relative,
-    transform_points, wrap_angle,
+    advance_pose,
+    cartesian_to_polar,
+    compose,
+    inverse,
+    polar_to_cartesian,
+    relative,
+    transform_points,
+    wrap_angle,
 )
 
 

@@ -4,13 +4,13 @@ and the likelihood-field matcher on it."""
 import numpy as np
 import pytest
 
+from mazeslam.envs.laser import VirtualLaser
 from mazeslam.geometry import transform_points
 from mazeslam.grid import GridSlam, GridSlamParams
 from mazeslam.grid.filter import ScanSensor
 from mazeslam.grid.matching import LikelihoodField, MatchParams, match_points, refine_pose
 from mazeslam.grid.occupancy import GridParams, TiledGrid, distinct_tile_bytes, integrate_scan, scan_rays
 from mazeslam.grid.synthetic import LASER, building_walls
-from mazeslam.envs.laser import VirtualLaser
 
 BEARINGS = LASER.geometry.bearings(LASER.beams)
 MOUNT = np.zeros(2)

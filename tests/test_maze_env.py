@@ -5,17 +5,17 @@ import sys
 import gymnasium as gym
 import numpy as np
 import pytest
+from conftest import PROJECT_ROOT
 from gymnasium.utils.env_checker import check_env
+from test_simulator import assert_scans_match_truth_and_map
 
 import mazeslam  # noqa: F401  (registers the environments)
-from conftest import PROJECT_ROOT
 from mazeslam import log, sidecars
 from mazeslam.envs.wrappers import RecordCourseLog
 from mazeslam.evaluation.metrics import absolute_trajectory_error
 from mazeslam.filters.motion import dead_reckoning
 from mazeslam.online_slam import OnlineFastSLAM
 from mazeslam.slam import slam_on_file
-from test_simulator import assert_scans_match_truth_and_map
 
 sys.path.insert(0, str(PROJECT_ROOT / "examples"))
 from frontier_agent import FrontierAgent  # noqa: E402
@@ -143,9 +143,9 @@ def test_rgb_array_rendering():
 
 def test_bad_arguments():
     with pytest.raises(ValueError, match="render_mode"):
-        gym.make("mazeslam/Maze-v0", render_mode="video").unwrapped
+        gym.make("mazeslam/Maze-v0", render_mode="video")
     with pytest.raises(ValueError, match="action_type"):
-        gym.make("mazeslam/Maze-v0", action_type="torque").unwrapped
+        gym.make("mazeslam/Maze-v0", action_type="torque")
 
 
 def test_human_rendering_draws_without_a_display():

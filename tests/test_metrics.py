@@ -5,7 +5,12 @@ import pytest
 
 from mazeslam import sidecars
 from mazeslam.evaluation.metrics import (
-    absolute_trajectory_error, align_se2, apply_se2, map_error, normalized_estimation_error, relative_pose_error,
+    absolute_trajectory_error,
+    align_se2,
+    apply_se2,
+    map_error,
+    normalized_estimation_error,
+    relative_pose_error,
 )
 
 

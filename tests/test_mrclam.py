@@ -5,8 +5,8 @@ import gzip
 
 import numpy as np
 import pytest
-
 from conftest import PROJECT_ROOT, SHARED_DATA
+
 from mazeslam import log, sidecars
 from mazeslam.evaluation.metrics import absolute_trajectory_error
 from mazeslam.filters.motion import dead_reckoning

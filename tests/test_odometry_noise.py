@@ -10,8 +10,8 @@ from click.testing import CliRunner
 from mazeslam import log, sidecars, simulate
 from mazeslam.cli import main
 from mazeslam.envs.odometry import OdometryParams
-from mazeslam.envs.world import RobotParams
 from mazeslam.envs.simulator import SimulationConfig
+from mazeslam.envs.world import RobotParams
 from mazeslam.evaluation.odometry_noise import measure_odometry_noise
 
 

@@ -5,6 +5,7 @@ import math
 
 import numpy as np
 import pytest
+from conftest import PROJECT_ROOT
 
 from mazeslam import log, sidecars
 from mazeslam.beams import EXERCISE_CONVENTION
@@ -16,7 +17,6 @@ from mazeslam.robot.epuck import EPuck
 from mazeslam.robot.interface import RobotDisconnected, RobotError
 from mazeslam.robot.omnicam import CameraCalibration, OmniCamera, detect_mirror, image_to_ranges
 from mazeslam.robot.recorder import Recorder, ScriptedController
-from conftest import PROJECT_ROOT
 
 ROOM = parse_maze("cell_size = 0.5\nwall_thickness = 0.01\n+---+\n|   |\n+---+\n")
 CALIBRATION = CameraCalibration(160, 160, 40, 150)

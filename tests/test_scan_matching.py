@@ -8,8 +8,14 @@ import pytest
 from mazeslam.beams import BeamGeometry
 from mazeslam.envs.laser import cast_rays
 from mazeslam.filters.correlative import CorrelativeParams, LikelihoodGrid, correlative_candidates
-from mazeslam.filters.scan_matching import (ReferenceScan, ScanMatchParams, laser_odometry, match_scan,
-                                            scan_points, wheel_motion)
+from mazeslam.filters.scan_matching import (
+    ReferenceScan,
+    ScanMatchParams,
+    laser_odometry,
+    match_scan,
+    scan_points,
+    wheel_motion,
+)
 from mazeslam.geometry import advance_pose, compose, relative, wrap_angle
 from mazeslam.log import ODOMETRY, SCAN, CourseLog
 

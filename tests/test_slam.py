@@ -6,11 +6,11 @@ import numpy as np
 import pytest
 
 from mazeslam import log, sidecars, simulate
+from mazeslam.beams import BeamGeometry, SensorOverrides
 from mazeslam.envs.laser import LaserParams
 from mazeslam.envs.simulator import SimulationConfig
 from mazeslam.evaluation.metrics import absolute_trajectory_error, align_se2, apply_se2, map_error
 from mazeslam.filters.motion import dead_reckoning
-from mazeslam.beams import BeamGeometry, SensorOverrides
 from mazeslam.slam import SlamConfig, slam_on_file
 
 
@@ -90,6 +90,7 @@ def test_known_association_without_truth_is_refused(tmp_path, default_run):
 
 def test_the_written_out_default_config_is_the_defaults_in_code():
     from conftest import PROJECT_ROOT
+
     from mazeslam.slam import SlamConfig, load_slam_config
 
     written = load_slam_config(PROJECT_ROOT / "configs" / "fastslam.toml")

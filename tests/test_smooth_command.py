@@ -75,7 +75,8 @@ def test_optimum_columns_are_the_filters_ratio_at_its_scored_records(default_run
     score = score_run(run, result)
     columns = optimum_columns(run, SlamConfig(), score)
     assert columns["optimum_ratio"] == pytest.approx(score.ate() / columns["optimum_ate_rmse"])
-    assert columns["optimum_aligned_ratio"] == pytest.approx(score.ate(aligned=True) / columns["optimum_ate_aligned_rmse"])
+    assert columns["optimum_aligned_ratio"] == pytest.approx(
+        score.ate(aligned=True) / columns["optimum_ate_aligned_rmse"])
     assert 0 < columns["optimum_ate_aligned_rmse"] <= columns["optimum_ate_rmse"]
     without_truth = load_run(_log_alone(default_run.log_path, run.path.parent / "elsewhere"))
     assert not has_known_optimum(without_truth)

@@ -57,7 +57,8 @@ def test_range_bearing_jacobians_match_central_differences():
     np.testing.assert_allclose(
         j_pose, central_difference(lambda p: range_bearing_residual(p, landmarks, observations)[0], poses), atol=1e-7)
     np.testing.assert_allclose(
-        j_landmark, central_difference(lambda m: range_bearing_residual(poses, m, observations)[0], landmarks), atol=1e-7)
+        j_landmark, central_difference(lambda m: range_bearing_residual(poses, m, observations)[0], landmarks),
+        atol=1e-7)
 
 
 def test_odometry_jacobians_match_central_differences():

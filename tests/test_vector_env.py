@@ -8,10 +8,10 @@ from types import SimpleNamespace
 import gymnasium as gym
 import numpy as np
 import pytest
+from conftest import PROJECT_ROOT
 from gymnasium.vector import AutoresetMode
 
 import mazeslam  # noqa: F401  (registers the environments)
-from conftest import PROJECT_ROOT
 from mazeslam.envs.laser import RayCaster
 from mazeslam.envs.maze import generate_maze, parse_maze
 from mazeslam.envs.maze_env import MazeEnv
@@ -191,8 +191,9 @@ def test_rgb_array_rendering_tiles_the_chosen_envs():
 
 
 def test_course_logs_of_every_env_and_episode(tmp_path):
-    from mazeslam.envs.wrappers import RecordVectorCourseLogs
     from test_simulator import assert_scans_match_truth_and_map
+
+    from mazeslam.envs.wrappers import RecordVectorCourseLogs
 
     envs = RecordVectorCourseLogs(make(2, rows=2, cols=2, max_steps=15), tmp_path / "env{env}-ep{episode}.log")
     envs.reset(seed=0)

@@ -71,7 +71,7 @@ class MazeGrids:
 
     # -- ray casting ------------------------------------------------------------------------
     def cast(self, envs: np.ndarray, x: np.ndarray, y: np.ndarray, heading: np.ndarray, bearings: np.ndarray,
-             max_range: float) -> tuple[np.ndarray, np.ndarray]:
+             max_range: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Cast beams from K sensors, sensor k at (x[k], y[k]) (m) facing ``heading[k]`` (rad) in maze
         ``envs[k]``, along ``bearings`` (N,) (rad, sensor frame).
 

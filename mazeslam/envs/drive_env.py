@@ -17,10 +17,10 @@ class DriveEnv(gym.Env):
     ## Action space
     ``Box(-1, 1, (2,), float32)``, clipped to [-1, 1], as fractions of the robot's limits:
 
-    | ``action_type`` | ``action[0]``                              | ``action[1]``                                    |
-    |-----------------|--------------------------------------------|--------------------------------------------------|
-    | ``"velocity"``  | forward speed / top wheel speed            | turn rate / top turn rate (2 top speed / wheelbase) |
-    | ``"wheels"``    | left wheel speed / top wheel speed         | right wheel speed / top wheel speed              |
+    | ``action_type`` | ``action[0]``                      | ``action[1]``                                       |
+    |-----------------|------------------------------------|-----------------------------------------------------|
+    | ``"velocity"``  | forward speed / top wheel speed    | turn rate / top turn rate (2 top speed / wheelbase) |
+    | ``"wheels"``    | left wheel speed / top wheel speed | right wheel speed / top wheel speed                 |
 
     A velocity command that would drive a wheel past its top speed is scaled down as a whole
     (the path's curvature is kept).
@@ -28,10 +28,13 @@ class DriveEnv(gym.Env):
     ## Observation space
     ``Dict``:
 
-    | key          | space                                | meaning                                                  |
-    |--------------|--------------------------------------|----------------------------------------------------------|
-    | ``scan``     | ``Box(0, max_range, (N,), float32)`` | laser ranges in beam order, metres, 0 = no return (a course log's scan record) |
-    | ``odometry`` | ``Box((2,), float32)``               | the step's odometry increment: distance travelled (m), heading change (rad) (the log's dX, dTheta); zeros at reset |
+    | key          | space                                | meaning                                              |
+    |--------------|--------------------------------------|------------------------------------------------------|
+    | ``scan``     | ``Box(0, max_range, (N,), float32)`` | laser ranges in beam order, metres, 0 = no return    |
+    | ``odometry`` | ``Box((2,), float32)``               | the step's odometry increment: distance travelled    |
+    |              |                                      | (m), heading change (rad); zeros at reset            |
+
+    ``scan`` is a course log's scan record; ``odometry`` is the log's dX, dTheta.
 
     ``N`` and ``max_range`` are ``config.laser.beams`` and ``config.laser.max_range``; the
     odometry bounds are twice what the top wheel speed allows in one step (room for slip).

@@ -11,6 +11,7 @@ import math
 from dataclasses import dataclass, field, fields
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from mazeslam.beams import BeamGeometry
 from mazeslam.config import require
@@ -73,7 +74,7 @@ class RayCaster:
         max_range: metres; walls farther away are not seen.
     """
 
-    def __init__(self, segments: np.ndarray, bearings: np.ndarray, max_range: float):
+    def __init__(self, segments: ArrayLike, bearings: ArrayLike, max_range: float):
         segments = np.asarray(segments, dtype=float).reshape(-1, 4)
         self.start_x, self.start_y = segments[:, 0], segments[:, 1]
         self.vector_x, self.vector_y = segments[:, 2] - segments[:, 0], segments[:, 3] - segments[:, 1]

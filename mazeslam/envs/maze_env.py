@@ -66,7 +66,7 @@ class MazeEnv(DriveEnv):
         self.rows, self.cols, self.maze_option, self.loop_fraction = rows, cols, maze, loop_fraction
         self.wall_reward, self.cell_reward, self.collision_penalty = wall_reward, cell_reward, collision_penalty
         self.physics_steps = max(1, round(control_period * self.config.logger.physics_rate))
-        self.maze = None
+        self.maze: Maze | None = None  # the episode's maze, from the first reset on
         self._figure = None
 
     # -- episode ------------------------------------------------------------------------------
@@ -74,16 +74,17 @@ class MazeEnv(DriveEnv):
         super().reset(seed=seed)
         options = options or {}
         self.steps, self.time = 0, 0.0
-        self.maze = choose_maze(options, self.maze_option, self.rows, self.cols, self.loop_fraction,
-                                self.config.maze, self.np_random)
-        self.start_pose = draw_start_pose(self.maze, options, self.np_random)
-        self.simulated = SimulatedRobot(self.maze, self.config, start_pose=self.start_pose, rng=self.np_random)
+        maze = choose_maze(options, self.maze_option, self.rows, self.cols, self.loop_fraction,
+                           self.config.maze, self.np_random)
+        self.maze = maze
+        self.start_pose = draw_start_pose(maze, options, self.np_random)
+        self.simulated = SimulatedRobot(maze, self.config, start_pose=self.start_pose, rng=self.np_random)
         self.walls, self.laser = self.simulated.walls, self.simulated.laser
         self._samples = _wall_samples(self.walls.surfaces)
         self._sample_tree = cKDTree(self._samples)
         self.seen = np.zeros(len(self._samples), dtype=bool)
-        self.visited = np.zeros((self.maze.rows, self.maze.cols), dtype=bool)
-        self.visited[self.maze.cell_of(*self.start_pose[:2])] = True
+        self.visited = np.zeros((maze.rows, maze.cols), dtype=bool)
+        self.visited[maze.cell_of(*self.start_pose[:2])] = True
         self._see()
         return self._observation(), self._info(collision=False)
 
@@ -92,7 +93,7 @@ class MazeEnv(DriveEnv):
         collision = self.simulated.advance(self.physics_steps / self.config.logger.physics_rate)
         self.time = self.simulated.time
         distance, turn = self.simulated.read_odometry()
-        cell = self.maze.cell_of(*self.simulated.pose[:2])
+        cell = self.simulated.maze.cell_of(*self.simulated.pose[:2])  # the episode's maze
         new_cell = not self.visited[cell]
         self.visited[cell] = True
         newly_seen = self._see()

@@ -7,6 +7,7 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
+from matplotlib.backends.backend_agg import FigureCanvasAgg  # noqa: E402
 from matplotlib.patches import Circle, Rectangle  # noqa: E402
 
 from mazeslam.geometry import transform_points  # noqa: E402
@@ -47,7 +48,9 @@ def draw_maze_env(env, slam: dict | None = None, size_pixels: int = 480) -> np.n
     ax.set_ylim(-margin, maze.rows * s + margin)
     ax.set_aspect("equal")
     ax.axis("off")
-    fig.canvas.draw()
-    image = np.asarray(fig.canvas.buffer_rgba())[..., :3].copy()
+    canvas = fig.canvas
+    assert isinstance(canvas, FigureCanvasAgg), "drawn off-screen with the Agg backend (matplotlib.use above)"
+    canvas.draw()
+    image = np.asarray(canvas.buffer_rgba())[..., :3].copy()
     plt.close(fig)
     return image

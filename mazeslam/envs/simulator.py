@@ -150,7 +150,8 @@ def simulate(
     end_time = duration if duration is not None else config.max_duration
     steps_per_odometry = 1.0 / (logger.odometry_rate * dt)
     steps_per_scan = logger.scan_period / dt
-    times, poses = [], []
+    record_times: list[float] = []
+    record_poses: list[np.ndarray] = []
     bar = tqdm(total=round(end_time if duration is not None else 0) or None, unit="sim s",
                disable=not progress, desc=f"simulate {out.name}")
     with LogWriter(out, config.laser.beams) as writer:
@@ -167,17 +168,17 @@ def simulate(
                 if step >= next_odometry - 1e-6:
                     next_odometry += steps_per_odometry
                 writer.write_odometry(t, *encoders.read())
-                times.append(t)
-                poses.append(world.pose)
+                record_times.append(t)
+                record_poses.append(world.pose)
             if scan_due:
                 next_scan += steps_per_scan
                 writer.write_scan(t, laser.scan(world.pose, laser_rng))
-                times.append(t)
-                poses.append(world.pose)
+                record_times.append(t)
+                record_poses.append(world.pose)
             if step % round(logger.physics_rate) == 0:
                 bar.update(1)
     bar.close()
-    times, poses = np.array(times), np.array(poses).reshape(-1, 3)
+    times, poses = np.array(record_times), np.array(record_poses).reshape(-1, 3)
     truth_file, map_file = sidecars.truth_path(out), sidecars.map_path(out)
     sidecars.write_truth(truth_file, times, poses)
     sensor = config.laser.sensor_mapping()

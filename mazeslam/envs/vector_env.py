@@ -128,16 +128,18 @@ class MazeVectorEnv(VectorEnv):
             if seed is not None or self.generators[env] is None:
                 self.generators[env], _ = seeding.np_random(seed)
             rng = self.generators[env]
-            self.mazes[env] = choose_maze(options, self.maze_option, self.rows, self.cols, self.loop_fraction,
-                                          self.config.maze, rng)
-            self.start_poses[env] = draw_start_pose(self.mazes[env], options, rng)
+            maze = choose_maze(options, self.maze_option, self.rows, self.cols, self.loop_fraction,
+                               self.config.maze, rng)
+            self.mazes[env] = maze
+            self.start_poses[env] = draw_start_pose(maze, options, rng)
         if len(envs) and (self.grids is None or not all(self.grids.fits(self.mazes[e]) for e in envs)):
             if len(envs) < self.num_envs:
                 raise ValueError("a maze of another shape needs a reset of every env")
-            self._allocate(self.mazes[0])
+            self._allocate(self._maze(0))
+        grids = self._grids()
         for env in envs:
-            self.grids.set(env, self.mazes[env])
-            self.wall_bins[env] = self.grids.wall_bins(env, WALL_SAMPLE_SPACING)
+            grids.set(env, self.mazes[env])
+            self.wall_bins[env] = grids.wall_bins(env, WALL_SAMPLE_SPACING)
             self.seen[env] = False
             self.visited[env] = False
         self.wall_counts[envs] = self.wall_bins[envs].sum(axis=1)
@@ -146,6 +148,19 @@ class MazeVectorEnv(VectorEnv):
         self._mark_visited(envs)
         for array in (self.steps, self.time, self._commanded, self._reported, self._collision, self._autoreset):
             array[envs] = 0
+
+    def _grids(self) -> MazeGrids:
+        """The mazes' grids, made by the first reset (of every env)."""
+        if self.grids is None:
+            raise RuntimeError("MazeVectorEnv: reset() every env first")
+        return self.grids
+
+    def _maze(self, env: int) -> Maze:
+        """Env ``env``'s current maze, drawn by its first reset."""
+        maze = self.mazes[env]
+        if maze is None:
+            raise RuntimeError(f"MazeVectorEnv: env {env} has no maze before its first reset()")
+        return maze
 
     def _allocate(self, maze: Maze) -> None:
         """Grids and per-env bookkeeping for mazes shaped like ``maze``."""
@@ -193,7 +208,7 @@ class MazeVectorEnv(VectorEnv):
         x, y, theta = (self.poses[:, k].copy() for k in range(3))
         touched = np.zeros(self.num_envs, dtype=bool)
         reach = robot.body_radius + 2 * robot.max_wheel_speed * dt * slip.shape[1]  # with room for slip
-        boxes = self.grids.boxes_near(x, y, reach)
+        boxes = self._grids().boxes_near(x, y, reach)
         for step in range(slip.shape[1]):
             self._commanded += commanded
             left, right = (commanded * scale + slip[:, step] * spread).T  # true ground travel, m
@@ -222,13 +237,14 @@ class MazeVectorEnv(VectorEnv):
         mount_x, mount_y = laser.geometry.mount_x, laser.geometry.mount_y
         sensor_x = x + mount_x * np.cos(heading) - mount_y * np.sin(heading)
         sensor_y = y + mount_x * np.sin(heading) + mount_y * np.cos(heading)
-        ranges, faces, along = self.grids.cast(envs, sensor_x, sensor_y, heading, self.bearings, laser.max_range)
+        grids = self._grids()
+        ranges, faces, along = grids.cast(envs, sensor_x, sensor_y, heading, self.bearings, laser.max_range)
         noisy = ranges + noise[envs] * laser.range_noise_std
         valid = np.isfinite(ranges) & (noisy >= laser.min_range) & (noisy <= laser.max_range)
         self.last_scan[envs] = np.where(valid & (uniforms[envs] >= laser.dropout), noisy, 0.0)
         hit = np.isfinite(ranges)
         bins = (np.broadcast_to(envs[:, None], hit.shape)[hit] * self.seen.shape[1]
-                + self.grids.face_bins(faces[hit], along[hit], WALL_SAMPLE_SPACING))
+                + grids.face_bins(faces[hit], along[hit], WALL_SAMPLE_SPACING))
         new = np.unique(bins[self.wall_bins.ravel()[bins] & ~self.seen.ravel()[bins]])
         self.seen.ravel()[new] = True
         newly_seen = np.bincount(new // self.seen.shape[1], minlength=self.num_envs)
@@ -238,7 +254,7 @@ class MazeVectorEnv(VectorEnv):
     def _mark_visited(self, envs: np.ndarray) -> np.ndarray:
         """Mark the cells the listed envs' robots stand in; return (E,) whether each was new."""
         rows, cols = self.visited.shape[1:]
-        size = self.grids.cell_size
+        size = self._grids().cell_size
         row = np.clip((self.poses[envs, 1] // size).astype(np.int64), 0, rows - 1)
         col = np.clip((self.poses[envs, 0] // size).astype(np.int64), 0, cols - 1)
         new = np.zeros(self.num_envs, dtype=bool)
@@ -262,9 +278,9 @@ class MazeVectorEnv(VectorEnv):
     def sub_env(self, index: int) -> SubEnv:
         """Env ``index``'s episode as a single env shows it (for wrappers and drawing)."""
         seen = self.seen[index] & self.wall_bins[index]
-        return SubEnv(self.mazes[index], self.config, self.start_poses[index].copy(), self.poses[index].copy(),
+        return SubEnv(self._maze(index), self.config, self.start_poses[index].copy(), self.poses[index].copy(),
                       self.visited[index].copy(), self.last_scan[index].copy(),
-                      self.grids.bin_points(np.flatnonzero(seen), WALL_SAMPLE_SPACING))
+                      self._grids().bin_points(np.flatnonzero(seen), WALL_SAMPLE_SPACING))
 
     def render(self):
         if self.render_mode is None:
@@ -332,3 +348,12 @@ def _check_mask(mask, count: int) -> np.ndarray:
     if not mask.any():
         raise ValueError("options['reset_mask'] must reset at least one env")
     return mask
+
+
+def maze_vector_env(env: VectorEnv) -> MazeVectorEnv:
+    """The ``MazeVectorEnv`` under ``env`` (its wrappers removed), for the wrappers that need its
+    episodes (``sub_env``) and config; a ``TypeError`` if there is none."""
+    base = env.unwrapped
+    if not isinstance(base, MazeVectorEnv):
+        raise TypeError(f"needs a MazeVectorEnv underneath, got {type(base).__name__}")
+    return base

@@ -3,8 +3,8 @@
 The walls are static boxes (the solid blocks of ``mazeslam.envs.walls``); the robot is a dynamic
 disc. Each physics step sets the disc's velocity from the two wheel speeds (differential-drive
 kinematics), lets pymunk move it, and pushes it back out of any wall it entered, so the robot
-slides along a wall it drives against and never passes through one. The robot's pose is that of its wheel-axle centre: x, y in metres, theta in
-radians, world frame.
+slides along a wall it drives against and never passes through one. The robot's pose is that of
+its wheel-axle centre: x, y in metres, theta in radians, world frame.
 """
 
 from __future__ import annotations

@@ -5,6 +5,7 @@ online: ``mazeslam.online_slam``."""
 from __future__ import annotations
 
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import gymnasium as gym
 import numpy as np
@@ -12,6 +13,9 @@ import numpy as np
 from mazeslam import sidecars
 from mazeslam.config import to_mapping
 from mazeslam.log import LogWriter
+
+if TYPE_CHECKING:
+    from mazeslam.envs.vector_env import MazeVectorEnv
 
 
 class EpisodeLog:
@@ -22,7 +26,8 @@ class EpisodeLog:
     def __init__(self, path: Path, beams: int):
         self.path = path
         self._writer = LogWriter(path, beams)
-        self._times, self._poses = [], []
+        self._times: list[float] = []
+        self._poses: list[np.ndarray] = []
 
     def write(self, t: float, odometry, scan, pose) -> None:
         """One step: ``t`` seconds, odometry (distance m, turn rad), scan (N,) m, true pose (3,)."""
@@ -115,8 +120,11 @@ class RecordVectorCourseLogs(gym.vector.VectorWrapper):
             if self._ended[env]:
                 self._start(env, observation, info)
             else:
-                self._logs[env].write(info["time"][env], observation["odometry"][env], observation["scan"][env],
-                                      info["pose"][env])
+                episode_log = self._logs[env]
+                if episode_log is None:
+                    raise RuntimeError(f"env {env} has no episode log: reset() it first")
+                episode_log.write(info["time"][env], observation["odometry"][env], observation["scan"][env],
+                                  info["pose"][env])
         self._ended = terminated | truncated
         for env in np.flatnonzero(self._ended):
             self._finish(env)
@@ -126,14 +134,21 @@ class RecordVectorCourseLogs(gym.vector.VectorWrapper):
         self._finish(env)
         self.episodes[env] += 1
         path = Path(self.path_template.format(env=env, episode=self.episodes[env]))
-        self._logs[env] = EpisodeLog(path, self.env.unwrapped.config.laser.beams)
-        self._logs[env].write(0.0, np.zeros(2), observation["scan"][env], info["pose"][env])
+        episode_log = EpisodeLog(path, self._maze_envs().config.laser.beams)
+        self._logs[env] = episode_log
+        episode_log.write(0.0, np.zeros(2), observation["scan"][env], info["pose"][env])
         self.log_paths.append(path)
 
     def _finish(self, env: int) -> None:
-        if self._logs[env] is not None:
-            self._logs[env].finish(self.env.unwrapped.sub_env(env))
+        episode_log = self._logs[env]
+        if episode_log is not None:
+            episode_log.finish(self._maze_envs().sub_env(env))
             self._logs[env] = None
+
+    def _maze_envs(self) -> MazeVectorEnv:
+        from mazeslam.envs.vector_env import maze_vector_env  # the simulator, loaded when used
+
+        return maze_vector_env(self.env)
 
     def close(self, **kwargs):
         for env in range(self.num_envs):

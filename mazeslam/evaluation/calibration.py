@@ -128,6 +128,7 @@ def observations_by_record(run: LoadedRun, extractor: CornerExtractor | None):
     corners with the extractor's covariances) and every landmark record (zero covariance)."""
     for record in run.log.records():
         if isinstance(record, log.ScanRecord):
+            assert extractor is not None  # None only for a log without scans
             features = extractor.extract(record.ranges)
             yield (record.index, features.observation_array(), features.observation_covariances(),
                    [o.kind for o in features.observations])
@@ -159,7 +160,8 @@ def observation_residuals(run: LoadedRun, extractor: CornerExtractor | None, pos
                 rows.append((ekf.innovation(observed_all[k], predicted[nearest]), covariance_all[k], kinds[k],
                              int(nearest), update))
     if not rows:
-        return Residuals(np.empty((0, 2)), np.empty((0, 2, 2)), np.empty(0, dtype=str), np.empty(0, int), np.empty(0, int))
+        return Residuals(np.empty((0, 2)), np.empty((0, 2, 2)), np.empty(0, dtype=str), np.empty(0, int),
+                         np.empty(0, int))
     errors, covariances, kinds, which, updates = zip(*rows)
     return Residuals(np.array(errors), np.array(covariances), np.array(kinds), np.array(which), np.array(updates))
 
@@ -253,7 +255,8 @@ class Calibration:
                       " of a landmark's errors from scan to scan: "
                       + "; ".join(f"{kind} {seen.widths[kind]:.2f} x, rho {seen.correlations[kind]:.2f}"
                                   for kind in seen.kind_scales),
-                      "covariance_scale = { " + ", ".join(f"{kind} = {scale:.3g}" for kind, scale in seen.kind_scales.items())
+                      "covariance_scale = { "
+                      + ", ".join(f"{kind} = {scale:.3g}" for kind, scale in seen.kind_scales.items())
                       + " }"]
         lines += ["", "[corners.lines]",
                   f"range_noise_std = {self.range_noise.std:.3g}   # m: the walls' scatter, "

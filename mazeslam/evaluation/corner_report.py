@@ -12,8 +12,8 @@ import matplotlib
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
-from matplotlib.animation import FuncAnimation, PillowWriter  # noqa: E402
 import numpy as np  # noqa: E402
+from matplotlib.animation import FuncAnimation, PillowWriter  # noqa: E402
 from tqdm.auto import tqdm  # noqa: E402
 
 from mazeslam.beam_detection import convention_warning  # noqa: E402
@@ -72,7 +72,8 @@ class CornerReport:
 
     def plot(self, index: int, path) -> Path:
         if index >= len(self.features):
-            raise ValueError(f"scan {index} does not exist: the log has {len(self.features)} scans (0..{len(self.features) - 1})")
+            raise ValueError(f"scan {index} does not exist: the log has {len(self.features)} scans "
+                             f"(0..{len(self.features) - 1})")
         mount = (self.scans.geometry.mount_x, self.scans.geometry.mount_y)
         return plot_scan(path, self.features[index], mount, self._title(index), self._true_corners(index))
 
@@ -82,7 +83,7 @@ class CornerReport:
             return None
         return transform_points(inverse(self.scans.true_poses[index]), self.scans.true_corners)
 
-    def animate(self, path, frames_per_second: float = 4.0, most_frames: int = 200) -> Path:
+    def animate(self, path, frames_per_second: int = 4, most_frames: int = 200) -> Path:
         """The scans in turn (every scan, or evenly spaced ones up to ``most_frames``), in one GIF,
         with fixed axes so the view does not jump."""
         frames = np.unique(np.linspace(0, len(self.features) - 1, min(len(self.features), most_frames)).astype(int))

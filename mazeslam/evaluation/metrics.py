@@ -75,13 +75,13 @@ def relative_pose_error(estimate: np.ndarray, truth: np.ndarray, delta: float, u
             raise ValueError(f"a record delta must be at least 1, got {delta}")
         ids = np.arange(0, len(truth), step)
     elif unit == "m":
-        ids, travelled = [0], 0.0
+        chosen, travelled = [0], 0.0
         for k in range(1, len(truth)):
             travelled += float(np.hypot(*(truth[k, :2] - truth[k - 1, :2])))
             if travelled >= delta:
-                ids.append(k)
+                chosen.append(k)
                 travelled = 0.0
-        ids = np.array(ids)
+        ids = np.array(chosen)
     else:
         raise ValueError(f"unit must be 'm' or 'records', got {unit!r}")
     if len(ids) < 2:
@@ -103,7 +103,8 @@ def normalized_estimation_error(estimate: np.ndarray, covariances: np.ndarray, t
     error[:, 2] = wrap_angle(error[:, 2])
     nees = np.full(len(error), np.nan)
     regular = np.linalg.det(covariances) > 1e-30
-    nees[regular] = np.einsum("ri,ri->r", error[regular], np.linalg.solve(covariances[regular], error[regular][..., None])[..., 0])
+    whitened = np.linalg.solve(covariances[regular], error[regular][..., None])[..., 0]
+    nees[regular] = np.einsum("ri,ri->r", error[regular], whitened)
     return nees
 
 

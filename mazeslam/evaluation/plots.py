@@ -11,7 +11,6 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
 
-
 def plot_run(path: str | Path, walls: np.ndarray, corners: np.ndarray, truth: np.ndarray,
              estimates: dict[str, np.ndarray], title: str = "") -> Path:
     """Save a top-down figure of a run to ``path`` (PNG, PDF, ... by suffix).

@@ -16,7 +16,12 @@ import pandas as pd
 
 from mazeslam.evaluation.consistency import nees_summary
 from mazeslam.evaluation.metrics import (
-    absolute_trajectory_error, align_se2, apply_se2, map_error, normalized_estimation_error, relative_pose_error,
+    absolute_trajectory_error,
+    align_se2,
+    apply_se2,
+    map_error,
+    normalized_estimation_error,
+    relative_pose_error,
 )
 from mazeslam.filters.motion import dead_reckoning
 from mazeslam.loaded_run import LoadedRun

@@ -87,7 +87,7 @@ def _ellipse(mean, covariance, sigmas: float = 2.0) -> Ellipse:
 
 
 def animate_slam(path, result: SlamResult, points: np.ndarray, truth: np.ndarray | None = None,
-                 walls: np.ndarray | None = None, frames_per_second: float = 5.0) -> Path:
+                 walls: np.ndarray | None = None, frames_per_second: int = 5) -> Path:
     """A GIF of the run: particles (red), map so far (purple), path so far, one frame per snapshot."""
     fig, ax = plt.subplots(figsize=(6, 6))
     extent = np.vstack([points, result.mean_poses[:, :2]] + ([truth[:, :2]] if truth is not None else []))

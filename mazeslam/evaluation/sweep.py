@@ -169,7 +169,8 @@ def replace_setting(config, place: str, value):
 def run_id(sweep: Sweep, run: dict) -> str:
     """A stable name for one run: a hash of its settings, seed and the sweep's base settings."""
     identity = {"settings": run["settings"], "seed": run["seed"], "maze": sweep.maze, "duration": sweep.duration,
-                "simulation": dataclasses.asdict(sweep.base_simulation()), "slam": dataclasses.asdict(sweep.base_slam())}
+                "simulation": dataclasses.asdict(sweep.base_simulation()),
+                "slam": dataclasses.asdict(sweep.base_slam())}
     text = json.dumps(identity, sort_keys=True, default=str)
     return hashlib.sha1(text.encode()).hexdigest()[:16]
 
@@ -187,6 +188,9 @@ def execute_run(sweep: Sweep, run: dict, maps_folder: str | None = None) -> dict
     result = slam_on_run(loaded, slam_config, progress=False)
     seconds = time.perf_counter() - started
     score = score_run(loaded, result, slam_config.evaluation.match_radius)
+    truth, walls = loaded.truth, loaded.walls
+    # The simulator writes the truth and map sidecars of every run.
+    assert score is not None and truth is not None and walls is not None
     filter_row, reckoning_row = score.table.loc[FILTER_MEAN], score.table.loc[DEAD_RECKONING]
     aligned_map_error = score.map_errors["aligned"]
     particles = slam_config.fastslam.NPARTICLES
@@ -215,10 +219,10 @@ def execute_run(sweep: Sweep, run: dict, maps_folder: str | None = None) -> dict
     }
     if maps_folder is not None:
         aligned_landmarks = apply_se2(score.alignment, result.landmarks) if len(result.landmarks) else result.landmarks
-        document = {"landmarks": aligned_landmarks.tolist(), "walls": loaded.walls.tolist(),
+        document = {"landmarks": aligned_landmarks.tolist(), "walls": walls.tolist(),
                     "corners": loaded.true_corners.tolist(),
                     "trajectory": apply_se2(score.alignment, result.mean_poses)[:, :2].round(5).tolist(),
-                    "truth": loaded.truth[:, :2].round(5).tolist()}
+                    "truth": truth[:, :2].round(5).tolist()}
         Path(maps_folder, f"{row['run_id']}.json").write_text(json.dumps(document, allow_nan=False))
     return row
 
@@ -282,7 +286,8 @@ def _execute(sweep: Sweep, runs: list[dict], maps_folder: str, workers: int | No
     if not runs:
         return
     if scheduler:
-        from distributed import Client, as_completed as dask_completed
+        from distributed import Client
+        from distributed import as_completed as dask_completed
 
         with Client(scheduler) as client:
             futures = [client.submit(execute_run, sweep, run, maps_folder, pure=False) for run in runs]
@@ -314,7 +319,8 @@ def summarise(table: pd.DataFrame, grid_keys: list[str], metrics: list[str] = ME
         row = dict(zip(grid_keys, key))
         row["runs"] = len(group)
         for metric in metrics:
-            values = group.get(metric, pd.Series(dtype=float)).dropna().to_numpy(dtype=float)  # absent from older tables
+            # A metric absent from older tables: no values.
+            values = group.get(metric, pd.Series(dtype=float)).dropna().to_numpy(dtype=float)
             mean = values.mean() if len(values) else math.nan
             half = (stats.t.ppf(0.975, len(values) - 1) * values.std(ddof=1) / math.sqrt(len(values))
                     if len(values) > 1 else math.nan)

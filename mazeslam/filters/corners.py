@@ -85,8 +85,10 @@ class CornerParams:
     def __post_init__(self):
         require(0 <= self.min_range < self.max_range,
                 f"corner min_range {self.min_range} must be >= 0 and below max_range {self.max_range}")
-        require(0 < self.max_abs_bearing <= 180, f"max_abs_bearing must be in (0, 180] degrees, got {self.max_abs_bearing}")
-        require(0 < self.min_corner_angle <= 90, f"min_corner_angle must be in (0, 90] degrees, got {self.min_corner_angle}")
+        require(0 < self.max_abs_bearing <= 180,
+                f"max_abs_bearing must be in (0, 180] degrees, got {self.max_abs_bearing}")
+        require(0 < self.min_corner_angle <= 90,
+                f"min_corner_angle must be in (0, 90] degrees, got {self.min_corner_angle}")
         require(self.max_corner_gap > 0, f"max_corner_gap must be positive, got {self.max_corner_gap}")
         require(self.max_skipped_points >= 0, f"max_skipped_points must be >= 0, got {self.max_skipped_points}")
         require(self.max_end_spacing > 0, f"max_end_spacing must be positive, got {self.max_end_spacing}")
@@ -225,7 +227,8 @@ class CornerExtractor:
         run_of = np.zeros(len(beams), dtype=int)
         for index, (first, last) in enumerate(runs):
             run_of[first : last + 1] = index
-        pairs = [(i, i + 1, segments[i + 1].first - segments[i].last - 1, run_of[segments[i].last] == run_of[segments[i + 1].first])
+        pairs = [(i, i + 1, segments[i + 1].first - segments[i].last - 1,
+                  run_of[segments[i].last] == run_of[segments[i + 1].first])
                  for i in range(len(segments) - 1)]
         if closed and len(segments) > 1:  # the loop closes: the last segment meets the first
             pairs.append((len(segments) - 1, 0, len(beams) - 1 - segments[-1].last + segments[0].first, True))
@@ -308,7 +311,8 @@ class CornerExtractor:
         inverse = (sb / determinant, -sa / determinant, -cb / determinant, ca / determinant)
         return (x, y), _sandwich(inverse, ((va, 0.0), (0.0, vb)))
 
-    def _wall_end(self, segment: LineSegment, beam: int, at_start: bool):
+    def _wall_end(self, segment: LineSegment, beam: int,
+                  at_start: bool) -> tuple[tuple[float, float], np.ndarray] | None:
         """Where a wall ends between its last beam and the next: the line meets the ray halfway.
 
         Returns ``(point, covariance (2, 2))``, or None when the two beams land farther apart on the

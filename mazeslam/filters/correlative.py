@@ -43,7 +43,8 @@ class CorrelativeParams:
     max_points: int = 90
 
     def __post_init__(self):
-        require(self.resolution > 0 and self.sigma > 0 and self.turn_step > 0, "resolution, sigma and turn_step must be positive")
+        require(self.resolution > 0 and self.sigma > 0 and self.turn_step > 0,
+                "resolution, sigma and turn_step must be positive")
         require(self.window_sigmas > 0, "window_sigmas must be positive")
         require(self.candidates >= 1 and self.max_points >= 1, "candidates and max_points must be at least 1")
 
@@ -99,7 +100,8 @@ def correlative_candidates(grid: LikelihoodGrid, points: np.ndarray, prior: np.n
     information = np.linalg.inv(prior_covariance)
     scale = 100.0 / len(points)
     shift_penalty = 0.5 * np.einsum("ti,ij,tj->t", shifts - prior[:2], information[:2, :2], shifts - prior[:2])
-    poses, scores = [], []
+    pose_blocks: list[np.ndarray] = []
+    score_blocks: list[np.ndarray] = []
     for turn in turns:
         cos_t, sin_t = math.cos(turn), math.sin(turn)
         placed = grid.cells(points @ np.array([[cos_t, sin_t], [-sin_t, cos_t]]) + prior[:2])  # (K, 2)
@@ -108,16 +110,16 @@ def correlative_candidates(grid: LikelihoodGrid, points: np.ndarray, prior: np.n
         cross = (shifts - prior[:2]) @ information[:2, 2] * turn_offset
         score = fit - shift_penalty - cross - 0.5 * information[2, 2] * turn_offset**2
         best = np.argsort(score)[-params.candidates:]
-        poses.append(np.column_stack([shifts[best], np.full(len(best), wrap_angle(turn))]))
-        scores.append(score[best])
-    poses, scores = np.concatenate(poses), np.concatenate(scores)
+        pose_blocks.append(np.column_stack([shifts[best], np.full(len(best), wrap_angle(turn))]))
+        score_blocks.append(score[best])
+    poses, scores = np.concatenate(pose_blocks), np.concatenate(score_blocks)
     return _distinct(poses[np.argsort(scores)[::-1]], params)
 
 
 def _distinct(ranked: np.ndarray, params: CorrelativeParams) -> np.ndarray:
     """From poses (N, 3) ranked best first, the best ``params.candidates`` that are not neighbours
     of a better one (within two cells and two turn steps): one seed per basin."""
-    chosen = []
+    chosen: list[np.ndarray] = []
     for pose in ranked:
         if all(np.hypot(*(pose[:2] - other[:2])) > 2 * params.resolution
                or abs(wrap_angle(pose[2] - other[2])) > math.radians(2 * params.turn_step) for other in chosen):

@@ -131,7 +131,8 @@ class FastSLAMParams:
                 "sigmaR must be positive unless the observations' own covariances are used (observation_scale > 0)")
         require(0 < self.gate <= self.new_landmark_gate,
                 f"need 0 < gate <= new_landmark_gate, got {self.gate} and {self.new_landmark_gate}")
-        require(0 <= self.resample_threshold <= 1, f"resample_threshold must be in [0, 1], got {self.resample_threshold}")
+        require(0 <= self.resample_threshold <= 1,
+                f"resample_threshold must be in [0, 1], got {self.resample_threshold}")
         require(self.association in tuple(Association),
                 f"association must be one of {', '.join(Association)}, got {self.association!r}")
         object.__setattr__(self, "association", Association(self.association))
@@ -361,14 +362,16 @@ class FastSLAM:
             residual = np.column_stack([model.nu[0][rows, k, j], model.nu[1][rows, k, j]])
             self.means[rows, j], self.covariances[rows, j], _ = ekf.update(
                 self.means[rows, j], self.covariances[rows, j], residual, model.jacobians(rows, j), noise)
-            self.log_weights[rows] += (-0.5 * likelihood[0][rows, k] - LOG_TWO_PI - 0.5 * np.log(likelihood[1][rows, k]))
+            self.log_weights[rows] += (-0.5 * likelihood[0][rows, k] - LOG_TWO_PI
+                                       - 0.5 * np.log(likelihood[1][rows, k]))
             self.seen[rows, j] += 1
             self.missed[rows, j] = 0
             matched_now[rows, j] = True
             report.matched += len(rows)
         unmatched = slots < 0
         nearest = distance2[:, k].min(axis=1, initial=np.inf)
-        if self.params.association == Association.KNOWN:  # an identity not yet mapped starts a landmark; none (-1): left out
+        # Known association: an identity not yet mapped starts a landmark; none (-1): left out.
+        if self.params.association == Association.KNOWN:
             new = unmatched & (identity >= 0)
         else:
             new = unmatched & (nearest >= self.params.new_landmark_gate)

@@ -52,7 +52,8 @@ class LineParams:
         require(self.merge_threshold > 0, f"merge_threshold must be positive, got {self.merge_threshold}")
         require(self.min_points >= 2, f"min_points must be at least 2, got {self.min_points}")
         require(self.min_length >= 0, f"min_length must be >= 0, got {self.min_length}")
-        require(0 < self.breakpoint_angle < 90, f"breakpoint_angle must be in (0, 90) degrees, got {self.breakpoint_angle}")
+        require(0 < self.breakpoint_angle < 90,
+                f"breakpoint_angle must be in (0, 90) degrees, got {self.breakpoint_angle}")
         require(self.range_noise_std >= 0, f"range_noise_std must be >= 0, got {self.range_noise_std}")
 
 
@@ -156,7 +157,7 @@ class SplitAndMerge:
     def _subset_sums(self, first: int, last: int) -> list[float]:
         """Sums of x, y, x^2, y^2, xy over positions first..last."""
         high, low = self._sums[last + 1], self._sums[first]
-        return [h - l for h, l in zip(high, low)]
+        return [high_sum - low_sum for high_sum, low_sum in zip(high, low)]
 
     def _distances(self, first: int, last: int, r: float, alpha: float) -> np.ndarray:
         return np.abs(self._points[first : last + 1] @ (math.cos(alpha), math.sin(alpha)) - r)

@@ -13,11 +13,29 @@ Both work on the particle arrays they are given and return new ones:
 
 from __future__ import annotations
 
+from typing import Protocol
+
 import numpy as np
 
 from mazeslam.filters import ekf
 from mazeslam.filters.motion import OdometryNoise, predict_odometry, predict_relative
 from mazeslam.geometry import advance_pose, compose, wrap_angle
+
+
+class Proposal(Protocol):
+    """What ``FastSLAM`` asks of a proposal: ``MotionProposal`` or ``ObservationProposal``."""
+
+    carries_pose_uncertainty: bool
+
+    def predict(self, poses: np.ndarray, pose_covariances: np.ndarray, distance: float, turn: float,
+                noise: OdometryNoise, rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray]: ...
+
+    def predict_relative(self, poses: np.ndarray, pose_covariances: np.ndarray, increment: np.ndarray,
+                         covariance: np.ndarray, rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray]: ...
+
+    def draw(self, poses: np.ndarray, pose_covariances: np.ndarray, assigned: np.ndarray, observations: np.ndarray,
+             means: np.ndarray, covariances: np.ndarray, noise: np.ndarray, rng: np.random.Generator,
+             ) -> tuple[np.ndarray, np.ndarray, tuple[np.ndarray, np.ndarray] | None]: ...
 
 
 class MotionProposal:
@@ -118,4 +136,4 @@ def _propagate(covariance: np.ndarray, f: np.ndarray, v: np.ndarray, motion: np.
     return f @ covariance @ np.swapaxes(f, 1, 2) + v @ motion @ np.swapaxes(v, 1, 2)
 
 
-PROPOSALS = {1: MotionProposal, 2: ObservationProposal}
+PROPOSALS: dict[int, type[Proposal]] = {1: MotionProposal, 2: ObservationProposal}

@@ -208,7 +208,7 @@ def scan_points(ranges: np.ndarray, geometry: BeamGeometry, params: ScanMatchPar
     return geometry.returns(ranges, params.min_range, params.max_range)
 
 
-def wheel_motion(course_log: CourseLog, first: int, last: int) -> tuple[np.ndarray, bool]:
+def wheel_motion(course_log: CourseLog, first: int | np.integer, last: int | np.integer) -> tuple[np.ndarray, bool]:
     """The odometry records after record ``first`` up to ``last`` chained: the motion (3,) in the
     robot frame at ``first`` (at the start pose for ``first = -1``), and whether there was any."""
     pose = np.zeros(3)

@@ -256,7 +256,7 @@ def solve(problem: SmoothingProblem, max_iterations: int = 50, step_tolerance: f
 
     Covariances: the diagonal blocks of ``(J^T J)^-1`` at the optimum (``marginal_covariances``).
     """
-    s, l = len(problem.initial_poses), len(problem.initial_landmarks)
+    pose_count, landmark_count = len(problem.initial_poses), len(problem.initial_landmarks)
     odometry_whitener = _whitener(problem.odometry_covariances)
     observation_whitener = _whitener(problem.observation_covariances)
 
@@ -283,9 +283,10 @@ def solve(problem: SmoothingProblem, max_iterations: int = 50, step_tolerance: f
         elif not converged:
             damping *= 10
     # 3. Covariances from the information matrix at the optimum.
-    pose_covariances, landmark_covariances = marginal_covariances(j.T @ j, ((s, 3), (l, 2)))
+    pose_covariances, landmark_covariances = marginal_covariances(j.T @ j, ((pose_count, 3), (landmark_count, 2)))
+    degrees_of_freedom = len(r) - (3 * pose_count + 2 * landmark_count)
     return SmoothingResult(problem.scan_records, poses, pose_covariances, problem.landmark_ids, landmarks,
-                           landmark_covariances, iterations, chi2, len(r) - (3 * s + 2 * l), bool(converged))
+                           landmark_covariances, iterations, chi2, degrees_of_freedom, bool(converged))
 
 
 def marginal_covariances(information: scipy.sparse.sparray, sizes: tuple[tuple[int, int], ...]) -> list[np.ndarray]:

@@ -80,8 +80,9 @@ def _open_text(path: Path):
 def read_carmen(path: str | Path) -> CarmenLog:
     """Read the FLASER, ODOM and PARAM lines of a CARMEN log; errors name the file and the line."""
     path = Path(path)
-    scans, odometry, params, ignored, sequence = [], [], {}, Counter(), []
-    width = None
+    scans, odometry, params, sequence = [], [], {}, []
+    ignored: Counter[str] = Counter()
+    width: int | None = None
     with _open_text(path) as handle:
         for number, line in enumerate(handle, start=1):
             parts = line.split()
@@ -110,6 +111,7 @@ def read_carmen(path: str | Path) -> CarmenLog:
                 raise LogFormatError(str(path), number, f"bad {kind} line: {error}") from error
     if not scans:
         raise LogFormatError(str(path), 1, "no FLASER (front laser) lines in this CARMEN log")
+    assert width is not None  # every FLASER line sets it, and there is one
     table = np.array(scans)
     odometry_table = np.array(odometry).reshape(-1, 4)
     return CarmenLog(
@@ -143,10 +145,10 @@ def import_carmen(path: str | Path, out: str | Path) -> dict:
     so the wheel odometry is the motion between consecutive ODOM messages *within* one scan
     interval. Each such step becomes an odometry record (distance along the step, heading
     change); each scan a scan record (ranges at or beyond the laser's maximum become 0, no
-    return). The scan's own "odometry" pose is the corrected one in these logs, so it adds no motion. ``*.truth.csv`` holds the
-    anchored poses (the corrected pose at each scan, plus the raw odometry since it) - a reference
-    from a mapping run, not independent ground truth; the map sidecar says so and records the
-    front laser's beam geometry. Returns counts.
+    return). The scan's own "odometry" pose is the corrected one in these logs, so it adds no
+    motion. ``*.truth.csv`` holds the anchored poses (the corrected pose at each scan, plus the
+    raw odometry since it) - a reference from a mapping run, not independent ground truth; the
+    map sidecar says so and records the front laser's beam geometry. Returns counts.
     """
     from mazeslam import sidecars
     from mazeslam.geometry import relative
@@ -156,7 +158,7 @@ def import_carmen(path: str | Path, out: str | Path) -> dict:
     max_range = carmen.max_range
     out = Path(out)
     times, poses = [], []
-    counts = Counter()
+    counts: Counter[str] = Counter()
     anchor = None  # the pose the current odometry stretch is measured from
     last_time = -math.inf
 

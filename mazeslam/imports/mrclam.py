@@ -56,7 +56,7 @@ def import_mrclam(folder: str | Path, robot: int, out: str | Path) -> dict:
     landmarks = _table(folder, "Landmark_Groundtruth.dat", 5)
     barcodes = _table(folder, "Barcodes.dat", 2)
     subject_of = {int(barcode): int(subject) for subject, barcode in barcodes}
-    skipped = Counter()
+    skipped: Counter[str] = Counter()
     kept = []
     for t, barcode, rng, bearing in measurements:
         subject = subject_of.get(int(barcode))

@@ -36,8 +36,10 @@ class Robot(abc.ABC):
     def read_scan(self) -> np.ndarray:
         """One scan: (N,) ranges in metres in the log's beam order, 0 = no return."""
 
-    def close(self) -> None:
+    def close(self) -> None:  # noqa: B027  (optional hook: nothing to release by default)
         """Stop and release the device."""
 
-    def advance(self, seconds: float) -> None:
-        """Let ``seconds`` pass. A real robot moves on its own; the simulator moves here."""
+    def advance(self, seconds: float) -> bool:
+        """Let ``seconds`` pass. A real robot moves on its own; the simulator moves here. Returns
+        whether the robot touched a wall meanwhile, if it can tell (a real robot cannot: False)."""
+        return False

@@ -83,8 +83,9 @@ def image_to_ranges(image: np.ndarray, calibration: CameraCalibration, geometry:
     """Ranges (N,) in metres in the beam order of ``geometry``, 0 where no wall is seen.
 
     The ring is unwarped into one row per beam (``cv2.remap``, bilinear, every ``RADIAL_STEP``
-    pixels from just outside the inner radius to just inside the outer one); the first sample darker than the threshold is the
-    wall's foot, placed between it and the sample before by linear interpolation of the grey level.
+    pixels from just outside the inner radius to just inside the outer one); the first sample
+    darker than the threshold is the wall's foot, placed between it and the sample before by
+    linear interpolation of the grey level.
     """
     grey = image if image.ndim == 2 else cv2.cvtColor(image, cv2.COLOR_BGR2GRAY)
     # One pixel inside the ring on each side, so the interpolation never reads the dark robot

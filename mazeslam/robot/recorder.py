@@ -15,6 +15,7 @@ from __future__ import annotations
 import math
 import sys
 import time
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -109,11 +110,18 @@ class Recorder:
         self.robot, self.out, self.beams, self.geometry = robot, Path(out), beams, geometry
         self.scan_period, self.odometry_period = scan_period, 1.0 / odometry_rate
         self.wheelbase = wheelbase
-        simulated = isinstance(robot, SimulatedRobot)
-        self.clock = clock or ((lambda: robot.time) if simulated else time.monotonic)
-        self.wait = wait or (robot.advance if simulated else time.sleep)
+        self.clock: Callable[[], float]
+        self.wait: Callable[[float], object]
+        if isinstance(robot, SimulatedRobot):
+            simulated = robot
+            self.clock = clock or (lambda: simulated.time)
+            self.wait = wait or simulated.advance
+        else:
+            self.clock = clock or time.monotonic
+            self.wait = wait or time.sleep
         self.records = 0
-        self._times, self._poses = [], []
+        self._times: list[float] = []
+        self._poses: list[np.ndarray] = []
 
     def run(self, controller, duration: float = math.inf, status=None) -> int:
         """Record until the controller quits or ``duration`` s pass; returns the records written."""
