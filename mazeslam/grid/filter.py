@@ -92,10 +92,10 @@ class GridSlamParams:
     window_margin: float = 1.5
     rescue: CorrelativeParams = field(default_factory=lambda: CorrelativeParams(
         resolution=0.1, sigma=0.1, turn_step=2.0, candidates=3, max_points=90))
-    rescue_sigma: tuple = (0.8, 0.35)
+    rescue_sigma: tuple = (0.4, 0.3)
     map_corrected_motion: bool = True
     rescue_below: float = 0.8
-    rescue_gain: float = 0.1
+    rescue_gain: float = 0.15
     motion: str = "laser"
     laser_odometry: ScanMatchParams = field(default_factory=lambda: ScanMatchParams(enabled=True))
 
