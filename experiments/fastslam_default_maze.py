@@ -31,7 +31,7 @@ from mazeslam import simulate
 from mazeslam.envs.simulator import SimulationConfig
 from mazeslam.evaluation import slam_report
 from mazeslam.evaluation.consistency import nis_summary
-from mazeslam.evaluation.scoring import DEAD_RECKONING, FILTER_MEAN, score_run
+from mazeslam.evaluation.scoring import DEAD_RECKONING, score_run
 from mazeslam.filters.fastslam import FastSLAMParams
 from mazeslam.loaded_run import load_run
 from mazeslam.slam import SlamConfig, slam_on_run
@@ -98,8 +98,8 @@ def markdown(table: pd.DataFrame) -> str:
     means["runs_within_a_third"] = table.groupby("estimator").ate_rmse_vs_reckoning.apply(lambda r: (r <= 1 / 3).mean())
     return ("Default simulated maze runs, seeds 0-4, 100 particles, default settings (`python "
             "experiments/fastslam_default_maze.py`; `--filter-seeds K`: K filter seeds per maze; `--ideal`: "
-            "noise-free laser, known association, 1000 particles). Lengths in metres; NEES: median over the run's records "
-            "(consistent: 3); NIS: mean over associated observations (consistent: 2); optimum ratio: the "
+            "noise-free laser, known association, 1000 particles). Lengths in metres; NEES: median over the "
+            "run's records (consistent: 3); NIS: mean over associated observations (consistent: 2); optimum ratio: the "
             "filter's ATE over the batch optimum's (1: as good as any estimator).\n\n## Per seed\n\n"
             + table.to_markdown(index=False, floatfmt=".4g") + "\n\n## Means over seeds\n\n"
             + means.to_markdown(floatfmt=".4g") + "\n")

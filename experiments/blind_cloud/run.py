@@ -93,7 +93,8 @@ def main(noise_scale: float = 1.0):
                          "std_major_m": spread_xy[1], "std_minor_m": spread_xy[0],
                          "std_theta_deg": np.degrees(np.sqrt(covariance[2, 2])),
                          "error_m": float(np.hypot(*error[:2])),
-                         "truth_mahalanobis_xy": float(np.sqrt(error[:2] @ np.linalg.solve(covariance[:2, :2] + 1e-18 * np.eye(2), error[:2]))),
+                         "truth_mahalanobis_xy": float(np.sqrt(
+                             error[:2] @ np.linalg.solve(covariance[:2, :2] + 1e-18 * np.eye(2), error[:2]))),
                          "ess": slam.effective_sample_size(), "resamplings": slam.resamplings,
                          "increments": len(increments)})
         if phase == "blind" and isinstance(record, log.OdometryRecord) and len(increments) % 40 == 1 or \

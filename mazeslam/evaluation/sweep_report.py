@@ -109,29 +109,32 @@ def _plot_against(table: pd.DataFrame, key: str, others: list[str], out_dir: Pat
     values = sorted(summary[key].unique()) if numeric else list(dict.fromkeys(table[key].astype(str)))
     positions = {value: k for k, value in enumerate(values)}
     categorical = not numeric or any(isinstance(v, str) for v in values)
+    unordered = categorical and not any("/" in str(v) for v in values)  # linked settings keep the grid's order
     for index, (label, group) in enumerate(groups):
         group = group.sort_values(key) if numeric else group.set_index(group[key].astype(str)).loc[
             [v for v in values if v in set(group[key].astype(str))]].reset_index(drop=True)
-        legend = ", ".join(f"{short_name(o)}={v}" for o, v in zip(others, label if isinstance(label, tuple) else (label,)))
+        label = label if isinstance(label, tuple) else (label,)
+        legend = ", ".join(f"{short_name(o)}={v}" for o, v in zip(others, label))
         x = group[key].to_numpy() if not categorical else np.array([positions[str(v)] for v in group[key]], float)
         if categorical and len(groups) > 1:  # side by side, not on top of each other
             x = x + 0.08 * (index - (len(groups) - 1) / 2)
         for ax, (metric, _, _, log) in zip(axes, plotted):
             if log:
-                cells = table if not others else table[
-                    np.logical_and.reduce([table[o] == v for o, v in
-                                           zip(others, label if isinstance(label, tuple) else (label,))])]
+                cells = table if not others else table[np.logical_and.reduce([table[o] == v
+                                                                               for o, v in zip(others, label)])]
                 grouped = cells.groupby(key)[metric]
                 quartiles = grouped.quantile([0.25, 0.5, 0.75]).unstack()
                 quartiles = quartiles.loc[[v for v in group[key]]]
                 middle = quartiles[0.5].to_numpy()
                 yerr = [middle - quartiles[0.25].to_numpy(), quartiles[0.75].to_numpy() - middle]
-                ax.errorbar(x, middle, yerr=yerr, marker="o", capsize=3, label=legend or "FastSLAM")
+                ax.errorbar(x, middle, yerr=yerr, marker="o", capsize=3, label=legend or "FastSLAM",
+                            linestyle="none" if unordered else "-")
                 continue
             mean = group[metric].to_numpy(dtype=float)
             half = group[f"{metric}_ci95"].fillna(0).to_numpy(dtype=float)
             lower = np.minimum(half, np.maximum(mean, 0))  # an RMSE, a ratio or a time is never below zero
-            ax.errorbar(x, mean, yerr=[lower, half], marker="o", capsize=3, label=legend or "FastSLAM")
+            ax.errorbar(x, mean, yerr=[lower, half], marker="o", capsize=3, label=legend or "FastSLAM",
+                        linestyle="none" if unordered else "-")  # no line between unordered categories
     for ax, (metric, title, lines, log) in zip(axes, plotted):
         if metric == "ate_rmse" and "reckoning_ate_rmse" in summary:
             ax.axhline(summary["reckoning_ate_rmse"].mean(), color="0.5", linestyle="--", label="dead reckoning")
@@ -148,6 +151,7 @@ def _plot_against(table: pd.DataFrame, key: str, others: list[str], out_dir: Pat
             ax.set_ylim(bottom=0)
         if categorical:
             ax.set_xticks(range(len(values)), [str(v).replace("/", "/\n") for v in values], fontsize=7)
+            ax.set_xlim(-0.5, len(values) - 0.5)
         elif summary[key].min() > 0 and summary[key].max() / summary[key].min() >= 20:
             ax.set_xscale("log")
             ax.set_xticks(values, [f"{v:g}" for v in values], fontsize=8)
