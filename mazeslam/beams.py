@@ -41,6 +41,7 @@ class BeamGeometry:
             raise ValueError(f"beam direction must be +1 or -1, got {self.direction!r}")
         if not 0.0 < self.field_of_view <= TWO_PI + 1e-9:
             raise ValueError(f"field_of_view must be in (0, 2pi] radians, got {self.field_of_view!r}")
+        _check_placement(self.first_beam_angle, self.mount_x, self.mount_y)
 
     @property
     def is_full_circle(self) -> bool:
@@ -78,6 +79,19 @@ class BeamGeometry:
         }
 
 
+#: Farthest a sensor can sit from the wheel axle, m (a robot is not bigger than this).
+MAX_MOUNT = 10.0
+
+
+def _check_placement(first_beam_angle, mount_x, mount_y) -> None:
+    """Finite angles and a sensor on the robot (a sensor far off makes every observation absurd)."""
+    if first_beam_angle is not None and not abs(first_beam_angle) <= 1000.0:
+        raise ValueError(f"first_beam_angle must be a finite angle (radians), got {first_beam_angle!r}")
+    for name, value in (("mount_x", mount_x), ("mount_y", mount_y)):
+        if value is not None and not abs(value) <= MAX_MOUNT:
+            raise ValueError(f"{name} must be within +-{MAX_MOUNT:g} m of the wheel axle, got {value!r}")
+
+
 @dataclass(frozen=True)
 class SensorOverrides:
     """Beam-geometry settings that replace a log's own (its sidecar or the exercise default); None
@@ -88,6 +102,11 @@ class SensorOverrides:
     direction: int | None = None
     mount_x: float | None = None
     mount_y: float | None = None
+
+    def __post_init__(self):
+        if self.direction is not None and self.direction not in (1, -1):
+            raise ValueError(f"beam direction must be +1 or -1, got {self.direction!r}")
+        _check_placement(self.first_beam_angle, self.mount_x, self.mount_y)
 
     def given(self) -> list[str]:
         """The names of the settings that are given (not None)."""

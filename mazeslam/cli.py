@@ -12,7 +12,9 @@ from pathlib import Path
 import click
 
 from mazeslam import log
-from mazeslam.config import ConfigError
+from mazeslam.config import ConfigError, InputError
+from mazeslam.options import BEAMS, DURATION, FINITE, MAZE_SIDE, PARTICLES, POSITIVE, RATE, SEED
+from mazeslam.outputs import OutputError, prepare_output_file, prepare_output_folder
 from mazeslam.robot.interface import RobotError
 
 
@@ -25,14 +27,14 @@ def main():
 @main.command()
 @click.option("--out", "out", type=click.Path(dir_okay=False, path_type=Path), required=True,
               help="Log file to write, e.g. runs/demo.log; sidecars go beside it.")
-@click.option("--seed", type=int, default=0, show_default=True, help="Seeds every random draw.")
+@click.option("--seed", type=SEED, default=0, show_default=True, help="Seeds every random draw.")
 @click.option("--maze", "maze", default="random", show_default=True,
               help="'random' or a maze text file (see configs/mazes/).")
-@click.option("--rows", type=click.IntRange(min=1), help="Rows of a random maze.")
-@click.option("--cols", type=click.IntRange(min=1), help="Columns of a random maze.")
-@click.option("--duration", type=click.FloatRange(min=0, min_open=True),
+@click.option("--rows", type=MAZE_SIDE, help="Rows of a random maze.")
+@click.option("--cols", type=MAZE_SIDE, help="Columns of a random maze.")
+@click.option("--duration", type=DURATION,
               help="Seconds to simulate [default: until the exploration tour is complete].")
-@click.option("--beams", type=click.IntRange(min=2), help="Beams per scan (the exercise's N).")
+@click.option("--beams", type=BEAMS, help="Beams per scan (the exercise's N).")
 @click.option("--config", "config_path", type=click.Path(exists=True, dir_okay=False, path_type=Path),
               help="Simulator TOML config (see configs/simulation.toml).")
 @click.option("--commands", "commands_path", type=click.Path(exists=True, dir_okay=False, path_type=Path),
@@ -48,6 +50,9 @@ def simulate(out, seed, maze, rows, cols, duration, beams, config_path, commands
 
     config = _with_overrides(load_config(config_path), rows=rows, cols=cols, beams=beams)
     policy = load_commands(commands_path) if commands_path else None
+    prepare_output_file(out)
+    if plot_path:
+        prepare_output_file(plot_path)
     result = run_simulation(out, config=config, maze=maze, seed=seed, duration=duration, policy=policy,
                             progress=not quiet)
     click.echo(f"wrote {result.log_path} ({len(result.times)} records, {result.times[-1]:.1f} s simulated), "
@@ -79,7 +84,7 @@ def _with_overrides(config, rows=None, cols=None, beams=None):
         if beams is not None:
             config = dataclasses.replace(config, laser=dataclasses.replace(config.laser, beams=beams))
     except ValueError as error:
-        raise click.BadParameter(str(error)) from error
+        raise click.BadParameter(str(error), param_hint="--rows/--cols/--beams") from error
     return config
 
 
@@ -91,7 +96,7 @@ def _with_overrides(config, rows=None, cols=None, beams=None):
 @click.option("--config", "config_path", type=click.Path(exists=True, dir_okay=False, path_type=Path),
               help="With --detect-beams: a slam TOML whose [corners] ranges, [odometry] jump tolerance and "
                    "[sensor] mount_x to use (e.g. configs/course.toml).")
-@click.option("--mount-x", type=float, help="With --detect-beams: sensor ahead of the wheel axle [m].")
+@click.option("--mount-x", type=FINITE, help="With --detect-beams: sensor ahead of the wheel axle [m].")
 def info(log_file, lenient, detect_beams, config_path, mount_x):
     """Validate a course log and print a summary: records, duration, beams, odometry travel."""
     course_log = log.read(log_file, strict=not lenient)
@@ -143,10 +148,10 @@ def _echo_sidecars(log_file: Path) -> None:
 def beam_geometry_options(function):
     """The options that override a log's beam geometry (for every command that reads scans)."""
     options = [
-        click.option("--first-beam-angle", type=float, help="Bearing of beam 0 in the robot frame [rad]."),
+        click.option("--first-beam-angle", type=FINITE, help="Bearing of beam 0 in the robot frame [rad]."),
         click.option("--beam-direction", type=click.Choice(["1", "-1"]),
                      help="1: bearings grow counter-clockwise with the beam index; -1: clockwise."),
-        click.option("--mount-x", type=float, help="Sensor ahead of the wheel axle [m] (CAMERA_POS_DX)."),
+        click.option("--mount-x", type=FINITE, help="Sensor ahead of the wheel axle [m] (CAMERA_POS_DX)."),
     ]
     for option in reversed(options):
         function = option(function)
@@ -157,8 +162,11 @@ def _geometry_overrides(first_beam_angle, beam_direction, mount_x):
     """The beam-geometry options as ``SensorOverrides`` (None: not given)."""
     from mazeslam.beams import SensorOverrides
 
-    return SensorOverrides(first_beam_angle=first_beam_angle, mount_x=mount_x,
-                           direction=int(beam_direction) if beam_direction else None)
+    try:
+        return SensorOverrides(first_beam_angle=first_beam_angle, mount_x=mount_x,
+                               direction=int(beam_direction) if beam_direction else None)
+    except ValueError as error:
+        raise click.BadParameter(str(error), param_hint="--first-beam-angle/--mount-x") from error
 
 
 @main.command()
@@ -181,6 +189,9 @@ def corners(log_file, scan_number, plot_path, animation_path, json_path, config_
     """Extract lines and corners from a log's scans (course log or CARMEN log)."""
     from mazeslam.evaluation.corner_report import CornerReport
 
+    for written in (plot_path, animation_path, json_path):
+        if written:
+            prepare_output_file(written)
     report = CornerReport.from_log(log_file, config_path, mode,
                                    _geometry_overrides(first_beam_angle, beam_direction, mount_x))
     click.echo(report.summary())
@@ -197,12 +208,12 @@ def corners(log_file, scan_number, plot_path, animation_path, json_path, config_
 
 @main.command()
 @click.argument("log_file", type=click.Path(exists=True, dir_okay=False, path_type=Path))
-@click.option("--particles", type=click.IntRange(min=1), help="NPARTICLES [default: from the config, 100].")
+@click.option("--particles", type=PARTICLES, help="NPARTICLES [default: from the config, 100].")
 @click.option("--config", "config_path", type=click.Path(exists=True, dir_okay=False, path_type=Path),
               help="FastSLAM TOML with [fastslam], [corners], [sensor] (see configs/fastslam.toml).")
 @click.option("--out", "out_dir", type=click.Path(file_okay=False, path_type=Path),
               help="Folder for trajectory.csv, map.json, slam.png [default: beside the log, <name>.slam/].")
-@click.option("--seed", type=int, help="Seed of the filter's random draws [default: from the config, 0].")
+@click.option("--seed", type=SEED, help="Seed of the filter's random draws [default: from the config, 0].")
 @click.option("--association", type=click.Choice(["unknown", "known"]),
               help="unknown: maximum likelihood with a gate; known: the landmark records' identities.")
 @click.option("--version", "version", type=click.Choice(["1", "2"]), help="FastSLAM 1.0 or 2.0.")
@@ -215,7 +226,7 @@ def slam(log_file, particles, config_path, out_dir, seed, association, version, 
     from mazeslam.slam_command import run_slam_command
 
     overrides = _geometry_overrides(first_beam_angle, beam_direction, mount_x)
-    out_dir = out_dir or log_file.with_name(f"{log_file.stem}.slam")
+    out_dir = prepare_output_folder(out_dir or log_file.with_name(f"{log_file.stem}.slam"))
     filter_changes = {"NPARTICLES": particles, "seed": seed, "association": association,
                       "version": int(version) if version else None}
     lines = run_slam_command(log_file, config_path, out_dir, filter_changes, overrides, animate, not quiet)
@@ -240,7 +251,7 @@ def smooth(log_file, config_path, association, run_dir, out_dir, first_beam_angl
 
     if (association == "from-run") != (run_dir is not None):
         raise click.UsageError("RUN_DIR goes with --association from-run, and only with it")
-    out_dir = out_dir or log_file.with_name(f"{log_file.stem}.smooth")
+    out_dir = prepare_output_folder(out_dir or log_file.with_name(f"{log_file.stem}.smooth"))
     overrides = _geometry_overrides(first_beam_angle, beam_direction, mount_x)
     click.echo("\n".join(run_smooth_command(log_file, config_path, out_dir, association, run_dir, overrides)))
 
@@ -252,21 +263,21 @@ def smooth(log_file, config_path, association, run_dir, out_dir, first_beam_angl
 @click.option("--camera", help="Camera device index or video file of the omnidirectional camera.")
 @click.option("--sim", is_flag=True, help="Record from the simulator instead (same recorder).")
 @click.option("--maze", default="random", show_default=True, help="With --sim: 'random' or a maze file.")
-@click.option("--seed", type=int, default=0, show_default=True, help="With --sim: the maze's and noise's seed.")
-@click.option("--beams", type=click.IntRange(min=2), default=180, show_default=True, help="N, ranges per scan.")
-@click.option("--scan-period", type=click.FloatRange(min=0, min_open=True), default=0.75, show_default=True,
+@click.option("--seed", type=SEED, default=0, show_default=True, help="With --sim: the maze's and noise's seed.")
+@click.option("--beams", type=BEAMS, default=180, show_default=True, help="N, ranges per scan.")
+@click.option("--scan-period", type=DURATION, default=0.75, show_default=True,
               help="T_b_S, seconds between scans.")
-@click.option("--odometry-rate", type=click.FloatRange(min=0, min_open=True), default=5.0, show_default=True,
+@click.option("--odometry-rate", type=RATE, default=5.0, show_default=True,
               help="F_O_U, odometry records per second.")
-@click.option("--center", nargs=2, type=float, help="Mirror centre in the image, pixels (x y).")
-@click.option("--inner-radius", type=float, default=40.0, show_default=True, help="Ring's inner radius, pixels.")
-@click.option("--outer-radius", type=float, help="Ring's outer radius, pixels [default: detect the mirror].")
-@click.option("--height", type=float, default=0.126, show_default=True, help="Mirror model h, metres.")
-@click.option("--alpha", type=float, default=107.0, show_default=True, help="Mirror model alpha, pixels/radian.")
+@click.option("--center", nargs=2, type=FINITE, help="Mirror centre in the image, pixels (x y).")
+@click.option("--inner-radius", type=FINITE, default=40.0, show_default=True, help="Ring's inner radius, pixels.")
+@click.option("--outer-radius", type=FINITE, help="Ring's outer radius, pixels [default: detect the mirror].")
+@click.option("--height", type=POSITIVE, default=0.126, show_default=True, help="Mirror model h, metres.")
+@click.option("--alpha", type=POSITIVE, default=107.0, show_default=True, help="Mirror model alpha, pixels/radian.")
 @click.option("--threshold", default="180", show_default=True, help="Wall grey level (1-255) or 'otsu'.")
 @click.option("--script", "script", type=click.Path(exists=True, dir_okay=False, path_type=Path),
               help="Drive from 'duration speed turn_rate' lines instead of the keyboard.")
-@click.option("--duration", type=click.FloatRange(min=0, min_open=True), help="Stop after this many seconds.")
+@click.option("--duration", type=DURATION, help="Stop after this many seconds.")
 @beam_geometry_options
 def record(out, port, camera, sim, maze, seed, beams, scan_period, odometry_rate, center, inner_radius,
            outer_radius, height, alpha, threshold, script, duration, first_beam_angle, beam_direction, mount_x):
@@ -274,6 +285,7 @@ def record(out, port, camera, sim, maze, seed, beams, scan_period, odometry_rate
     and record odometry and omnidirectional-camera scans as a course log."""
     from mazeslam.record_command import run_record
 
+    prepare_output_file(out)
     lines = run_record(out=out, port=port, camera=camera, sim=sim, maze=maze, seed=seed, beams=beams,
                        scan_period=scan_period, odometry_rate=odometry_rate, center=center,
                        inner_radius=inner_radius, outer_radius=outer_radius, height=height, alpha=alpha,
@@ -296,7 +308,10 @@ def sweep(sweep_file, out_dir, workers, scheduler, quiet):
     from mazeslam.evaluation.sweep_report import make_report
 
     definition = load_sweep(sweep_file)
+    prepare_output_folder(out_dir)
     result = run_sweep(definition, out_dir, workers, scheduler, progress=not quiet)
+    for problem in result.skipped:
+        click.echo(f"warning: {problem}", err=True)
     click.echo(f"{definition.name}: {len(result.table)} runs ({result.ran} run now in {result.seconds:.1f} s, "
                f"{result.reused} already in {out_dir})")
     click.echo((out_dir / "summary.md").read_text())
@@ -318,6 +333,8 @@ def calibrate(log_file, config_path, write_path, first_beam_angle, beam_directio
     from mazeslam.loaded_run import load_run
     from mazeslam.slam import load_slam_config
 
+    if write_path:
+        prepare_output_file(write_path)
     config = load_slam_config(config_path)
     run = load_run(log_file, _geometry_overrides(first_beam_angle, beam_direction, mount_x).over(config.sensor))
     try:
@@ -385,6 +402,7 @@ def import_mrclam_command(dataset, robot, out):
     """UTIAS MRCLAM: velocity odometry and barcoded landmark observations, Vicon truth."""
     from mazeslam.imports.mrclam import import_mrclam
 
+    prepare_output_file(out)
     counts = import_mrclam(dataset, robot, out)
     skipped = ", ".join(f"{count} {reason}" for reason, count in counts["skipped"].items()) or "none"
     click.echo(f"wrote {out}: {counts['records']} records ({counts['odometry_records']} odometry, "
@@ -399,6 +417,7 @@ def import_carmen_command(carmen_log, out):
     """A CARMEN laser log (plain or gzipped): front-laser scans, wheel odometry, reference poses."""
     from mazeslam.imports.carmen import import_carmen
 
+    prepare_output_file(out)
     counts = import_carmen(carmen_log, out)
     click.echo(f"wrote {out}: " + ", ".join(f"{value} {key}" for key, value in counts.items()))
 
@@ -406,22 +425,35 @@ def import_carmen_command(carmen_log, out):
 @main.command()
 @click.option("--out", "out_dir", type=click.Path(file_okay=False, path_type=Path), default=Path("runs/demo"),
               show_default=True, help="Folder for the log, sidecars, table and figure.")
-@click.option("--seed", type=int, default=0, show_default=True)
+@click.option("--seed", type=SEED, default=0, show_default=True)
 @click.option("--quiet", is_flag=True, help="No progress bar.")
 def demo(out_dir, seed, quiet):
     """The main job on defaults: simulate a maze run, run FastSLAM, print the ATE table, plot it."""
     from mazeslam.demo import run_demo
 
+    prepare_output_folder(out_dir)
     click.echo("\n".join(run_demo(out_dir, seed=seed, progress=not quiet)))
 
 
+#: The errors the command line reports as one line ``error: <message>`` (no traceback): bad input
+#: (a log, a config, a maze, a sweep file; a setting out of range), an output that cannot be
+#: written, a robot that went away, and any file the system refuses (OSError).
+KNOWN_ERRORS = (log.LogFormatError, ConfigError, InputError, OutputError, ValueError, RobotError, OSError)
+
+
+def exit_status(error: BaseException) -> int:
+    """The exit status of a ``KNOWN_ERRORS`` error: 2 for bad input, 1 for an output or the system."""
+    return 1 if isinstance(error, (OutputError, PermissionError)) or (
+        isinstance(error, OSError) and not isinstance(error, FileNotFoundError)) else 2
+
+
 def run():
-    """Entry point: turn known input errors into a one-line message and exit status 2."""
+    """Entry point: turn known errors into a one-line message and exit status 2 (bad input) or 1."""
     try:
         main(standalone_mode=True)
-    except (log.LogFormatError, ConfigError, ValueError, FileNotFoundError, RobotError) as error:
+    except KNOWN_ERRORS as error:
         click.echo(f"error: {error}", err=True)
-        raise SystemExit(2) from error
+        raise SystemExit(exit_status(error)) from error
 
 
 if __name__ == "__main__":

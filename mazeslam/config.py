@@ -3,15 +3,26 @@
 Every parameter has a default in code (the e-puck and the exercise); a TOML file overrides only the
 keys it names. A key the dataclass does not know is an error that names the file, the section and
 the key, so a typo never silently falls back to a default.
+
+Settings are checked once, where they come in (``from_mapping``/``load_toml`` for files,
+``with_changes`` for the command line and code): first their type from the dataclass's field
+annotations (``int``, ``float``, ``bool``, ``str``, Enums, tuples, dicts, ``X | None``) - no bool
+for a number, no fraction for an integer, no text for a number, no nan, no infinity except where the
+default is infinite (no limit), no magnitude beyond ``MAX_FLOAT`` - then their ranges in each
+class's ``__post_init__``. A refused value raises ``ConfigError`` naming ``file: [section] key``,
+the value and the reason.
 """
 
 from __future__ import annotations
 
 import dataclasses
 import enum
+import gzip
 import math
 import tomllib
+import types
 import typing
+import zlib
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, TypeVar
 
@@ -25,6 +36,44 @@ T = TypeVar("T", bound="DataclassInstance")
 
 class ConfigError(ValueError):
     """A configuration file or mapping that cannot be turned into parameters."""
+
+
+class InputError(ValueError):
+    """An input file that cannot be read (missing, a folder, unreadable, not text, a broken gzip
+    stream); the message names the file."""
+
+
+#: Largest magnitude of a float setting: no length, time, angle or noise of this project comes near
+#: it, and its square still fits a float.
+MAX_FLOAT = 1e9
+#: Integer settings fit 64 bits.
+MAX_INT = 2**63 - 1
+
+
+def read_text(path: str | Path, what: str = "file") -> str:
+    """The text of ``path`` (UTF-8, or gzip-compressed UTF-8 when it starts with the gzip magic);
+    every I/O, decompression and decoding error as one ``InputError`` naming the file. A missing
+    file raises ``FileNotFoundError`` with the same kind of message."""
+    path = Path(path)
+    try:
+        data = path.read_bytes()
+        if data[:2] == b"\x1f\x8b":
+            data = gzip.decompress(data)
+        return data.decode("utf-8")
+    except FileNotFoundError as error:
+        raise FileNotFoundError(f"{path}: {what} not found") from error
+    except IsADirectoryError as error:
+        raise InputError(f"{path}: is a folder, not a {what}") from error
+    except OSError as error:  # PermissionError, BadGzipFile (an OSError), ...
+        raise InputError(f"{path}: cannot read the {what}: {error.strerror or error}") from error
+    except EOFError as error:
+        raise InputError(f"{path}: the gzip stream is cut off (truncated file)") from error
+    except zlib.error as error:
+        raise InputError(f"{path}: broken gzip data ({error})") from error
+    except UnicodeDecodeError as error:
+        line = error.object[: error.start].count(b"\n") + 1
+        raise InputError(f"{path}:{line}: not a text {what} (not UTF-8: {error.reason} at byte "
+                         f"{error.start})") from error
 
 
 def from_mapping(cls: type[T], mapping: dict[str, Any], where: str = "config") -> T:
@@ -47,33 +96,135 @@ def from_mapping(cls: type[T], mapping: dict[str, Any], where: str = "config") -
         if isinstance(kind, type) and dataclasses.is_dataclass(kind):
             values[name] = from_mapping(kind, value, f"{where} [{name}]")
         else:
-            values[name] = _coerce(kind, name, value, where)
+            values[name] = check_setting(kind, name, value, where, _allows_infinity(fields[name]))
     try:
         return cls(**values)
     except (TypeError, ValueError) as error:
         raise ConfigError(f"{where}: {error}") from error
 
 
-def _coerce(kind, name: str, value, where: str):
-    """``value`` as the option type ``kind`` where that is an Enum (TOML and the command line give
-    its value); any other value unchanged (the dataclass checks it)."""
-    if not (isinstance(kind, type) and issubclass(kind, enum.Enum)):
-        return value
+def _allows_infinity(field: dataclasses.Field) -> bool:
+    """A float setting may be infinite where its default is (an infinite limit: no limit)."""
+    return isinstance(field.default, float) and math.isinf(field.default)
+
+
+def _shown(value) -> str:
+    """``value`` for a message, cut short (a setting can be a long list)."""
+    text = repr(value)
+    if isinstance(value, bool):
+        text = "true" if value else "false"
+    return text if len(text) <= 40 else text[:37] + "..."
+
+
+class _Refused(ValueError):
+    """Why a value does not fit a setting's type (``check_setting`` adds where and which)."""
+
+
+def check_setting(kind, name: str, value, where: str = "config", allow_infinity: bool = False):
+    """``value`` checked against the setting ``name``'s annotation ``kind`` (and converted: an int for
+    a float, a list for a tuple, a value for an Enum); ``ConfigError`` naming ``where``, the key,
+    the value and the reason when it does not fit. Ranges are the dataclasses' ``__post_init__``'s."""
     try:
-        return kind(value)
-    except ValueError as error:
-        choices = ", ".join(repr(member.value) for member in kind)
-        raise ConfigError(f"{where}: {name} must be one of {choices}, got {value!r}") from error
+        return _typed(kind, value, allow_infinity)
+    except _Refused as error:
+        raise ConfigError(f"{where}: {name} = {_shown(value)}: {error}") from None
+
+
+def _typed(kind, value, allow_infinity: bool = False):
+    origin, args = typing.get_origin(kind), typing.get_args(kind)
+    if kind is None or kind is typing.Any:
+        return value
+    if origin in (typing.Union, types.UnionType):
+        if value is None and type(None) in args:
+            return None
+        options = [arg for arg in args if arg is not type(None)]
+        # Exact types first (an int for ``int | str``), then conversions (an int for a float).
+        ordered = sorted(options, key=lambda arg: not (isinstance(arg, type) and type(value) is arg))
+        reasons = []
+        for option in ordered:
+            try:
+                return _typed(option, value, allow_infinity)
+            except _Refused as error:
+                reasons.append(str(error))
+        raise _Refused(" or ".join(dict.fromkeys(reasons)))
+    if kind is bool:
+        if not isinstance(value, bool):
+            raise _Refused("must be true or false")
+        return value
+    if kind is int:
+        if isinstance(value, bool) or not isinstance(value, (int, np.integer)):
+            raise _Refused("must be an integer" + (" (no fraction)" if isinstance(value, float) else ""))
+        if abs(int(value)) > MAX_INT:
+            raise _Refused(f"must be an integer within +-{MAX_INT} (64 bits)")
+        return int(value)
+    if kind is float:
+        if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):
+            raise _Refused("must be a number")
+        try:
+            number = float(value)
+        except OverflowError:  # an integer beyond any float
+            raise _Refused(f"is out of range: a setting's magnitude is at most {MAX_FLOAT:g}") from None
+        if math.isnan(number):
+            raise _Refused("must be a number, not nan")
+        if math.isinf(number):
+            if allow_infinity and number > 0 and isinstance(value, float):
+                return number
+            raise _Refused("must be finite" + (" (or inf: no limit)" if allow_infinity else ""))
+        if abs(number) > MAX_FLOAT:
+            raise _Refused(f"is out of range: a setting's magnitude is at most {MAX_FLOAT:g}")
+        return number
+    if kind is str:
+        if not isinstance(value, str):
+            raise _Refused("must be a text")
+        return value
+    if isinstance(kind, type) and issubclass(kind, enum.Enum):
+        try:
+            return kind(value)
+        except ValueError:
+            raise _Refused(f"must be one of {', '.join(repr(member.value) for member in kind)}") from None
+    if kind is tuple or origin is tuple or kind is list or origin is list:
+        if not isinstance(value, (list, tuple)):
+            raise _Refused("must be a list")
+        if args and args[-1] is not Ellipsis and len(args) != len(value):
+            raise _Refused(f"must be a list of {len(args)} values")
+        if not args:  # a bare ``tuple``: the settings' are lists of numbers
+            kinds = [float] * len(value)
+        elif args[-1] is Ellipsis:
+            kinds = [args[0]] * len(value)
+        else:
+            kinds = list(args)
+        items = []
+        for k, (item_kind, item) in enumerate(zip(kinds, value)):
+            try:
+                items.append(_typed(item_kind, item))
+            except _Refused as error:
+                raise _Refused(f"item {k + 1} ({_shown(item)}) {error}") from None
+        return list(items) if (kind is list or origin is list) else tuple(items)
+    if kind is dict or origin is dict:
+        if not isinstance(value, dict):
+            raise _Refused("must be a table")
+        key_kind, value_kind = args if len(args) == 2 else (None, None)
+        checked = {}
+        for key, item in value.items():
+            try:
+                checked[_typed(key_kind, key)] = _typed(value_kind, item)
+            except _Refused as error:
+                raise _Refused(f"entry {key!r} ({_shown(item)}) {error}") from None
+        return checked
+    if isinstance(kind, type) and dataclasses.is_dataclass(kind):
+        if not isinstance(value, kind):
+            raise _Refused(f"must be a {kind.__name__} table")
+        return value
+    return value
 
 
 def load_toml(cls: type[T], path: str | Path) -> T:
     """Read a TOML file into dataclass ``cls`` (sections map to nested dataclass fields)."""
     path = Path(path)
     try:
-        with path.open("rb") as handle:
-            mapping = tomllib.load(handle)
-    except FileNotFoundError as error:
-        raise ConfigError(f"{path}: config file not found") from error
+        mapping = tomllib.loads(read_text(path, "config file"))
+    except (FileNotFoundError, InputError) as error:
+        raise ConfigError(str(error)) from error
     except tomllib.TOMLDecodeError as error:
         raise ConfigError(f"{path}: not valid TOML: {error}") from error
     return from_mapping(cls, mapping, str(path))
@@ -84,7 +235,12 @@ def with_changes(params: T, **changes) -> T:
     field (an option the user did not give). The one merge of command-line options into settings.
     A value the dataclass refuses raises ``ConfigError`` naming the field(s) changed."""
     hints = typing.get_type_hints(type(params))
-    given = {name: _coerce(hints.get(name), name, value, type(params).__name__)
+    fields = {f.name: f for f in dataclasses.fields(params)}
+    unknown = sorted(set(changes) - set(fields))
+    if unknown:
+        raise ConfigError(f"{type(params).__name__}: unknown parameter(s) {', '.join(unknown)}")
+    given = {name: check_setting(hints.get(name), name, value, type(params).__name__,
+                                 _allows_infinity(fields[name]))
              for name, value in changes.items() if value is not None}
     if not given:
         return params

@@ -95,6 +95,8 @@ def load_run(path: str | Path, sensor: SensorOverrides | None = None, strict: bo
     map_file, truth_file = sidecars.map_path(path), sidecars.truth_path(path)
     world = sidecars.read_map(map_file) if map_file.exists() else None
     truth = sidecars.read_truth(truth_file)[1] if truth_file.exists() else None
+    if truth is not None and len(truth) == len(course_log) + 1 and not course_log.skipped:
+        truth = truth[:-1]  # a recording killed between a record's true pose and its log line
     if truth is not None and len(truth) != len(course_log):
         raise ValueError(f"{truth_file}: {len(truth)} poses for the {len(course_log)} records of {path}")
     if world is not None:

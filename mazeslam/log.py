@@ -30,12 +30,19 @@ from typing import NamedTuple
 
 import numpy as np
 
+from mazeslam.config import read_text
+
 ODOMETRY = 0
 SCAN = 1
 LANDMARK = 2
 PADDING = -1.0
 DECIMALS = 6
 _COMMENT_PREFIXES = ("#", "%")
+#: Largest magnitude of a timestamp (s; Unix time in milliseconds stays below) and of a data value
+#: (metres, radians, landmark ids): beyond them a value is a corrupted number, and sums of them
+#: (odometry travel, poses) would overflow.
+MAX_TIME = 1e13
+MAX_VALUE = 1e9
 
 
 class LogFormatError(ValueError):
@@ -161,14 +168,7 @@ def read(path: str | Path, strict: bool = True) -> CourseLog:
     ``strict=False`` bad lines are left out and listed in ``CourseLog.skipped``; the expected width
     is then the most common one.
     """
-    path = Path(path)
-    try:
-        text = path.read_text()
-    except FileNotFoundError as error:
-        raise FileNotFoundError(f"{path}: log file not found") from error
-    except UnicodeDecodeError as error:
-        raise LogFormatError(str(path), 1, f"not a text file ({error.reason})") from error
-    return parse(text, str(path), strict)
+    return parse(read_text(path, "log file"), str(path), strict)
 
 
 def parse(text: str, source: str = "<text>", strict: bool = True) -> CourseLog:
@@ -223,6 +223,11 @@ def _check_line(parts: list[str], width: int, previous_time: float, first_line: 
     bad_column = next((c for c, v in enumerate(values, 1) if not math.isfinite(v)), None)
     if bad_column is not None:
         return None, f"value {parts[bad_column - 1]!r} in column {bad_column} is not finite"
+    if abs(values[0]) > MAX_TIME:
+        return None, f"timestamp {parts[0]!r} is implausibly large (magnitude above {MAX_TIME:g} s)"
+    huge = next((c for c, v in enumerate(values[2:], 3) if abs(v) > MAX_VALUE), None)
+    if huge is not None:
+        return None, f"value {parts[huge - 1]!r} in column {huge} is implausibly large (magnitude above {MAX_VALUE:g})"
     t, flag = values[0], values[1]
     if flag == ODOMETRY:
         if width < 4:

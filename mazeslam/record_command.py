@@ -39,7 +39,8 @@ def run_record(out, port=None, camera=None, sim=False, maze="random", seed=0, be
         if interactive:
             controller.close()
         robot.close()
-    return [f"wrote {out}: {records} records; map sidecar with the beam geometry"
+    stopped = f" (stopped by {recorder.stopped_by})" if recorder.stopped_by else ""
+    return [f"wrote {out}: {records} records{stopped}; map sidecar with the beam geometry"
             + (" and truth sidecar" if sim else "")]
 
 

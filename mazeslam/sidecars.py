@@ -22,7 +22,7 @@ from pathlib import Path
 import numpy as np
 
 from mazeslam.beams import BeamGeometry
-from mazeslam.config import jsonable
+from mazeslam.config import jsonable, read_text
 
 TRUTH_HEADER = "t,x,y,theta"
 MAP_FORMAT = "mazeslam-map"
@@ -51,20 +51,59 @@ def write_truth(path: str | Path, times: np.ndarray, poses: np.ndarray) -> None:
     np.savetxt(path, table, fmt="%.6f", delimiter=",", header=TRUTH_HEADER, comments="")
 
 
+class TruthWriter:
+    """Writes a truth CSV row by row, flushing each, so a recording that is killed keeps every
+    pose written (as ``write_truth`` would have written them). Use as a context manager."""
+
+    def __init__(self, path: str | Path):
+        self.path = Path(path)
+        self._file = self.path.open("w")
+        self._file.write(TRUTH_HEADER + "\n")
+        self._file.flush()
+
+    def write(self, t: float, pose) -> None:
+        x, y, theta = (float(v) for v in pose)
+        self._file.write(f"{t:.6f},{x:.6f},{y:.6f},{theta:.6f}\n")
+        self._file.flush()
+
+    def close(self) -> None:
+        self._file.close()
+
+    def __enter__(self) -> TruthWriter:
+        return self
+
+    def __exit__(self, *exc_info) -> None:
+        self.close()
+
+
 def read_truth(path: str | Path) -> tuple[np.ndarray, np.ndarray]:
     """Read a truth CSV: ``(times (R,), poses (R, 3))``. Errors name the file and what is wrong."""
     path = Path(path)
-    with path.open() as handle:
-        header = handle.readline().strip()
-    if header.replace(" ", "") != TRUTH_HEADER:
-        raise ValueError(f"{path}:1: expected the header {TRUTH_HEADER!r}, got {header!r}")
-    try:
-        table = np.loadtxt(path, delimiter=",", skiprows=1, ndmin=2)
-    except ValueError as error:
-        raise ValueError(f"{path}: {error}") from error
+    table = _read_table(path, TRUTH_HEADER, "truth sidecar")
     if table.shape[1] != 4 or not np.all(np.isfinite(table)):
         raise ValueError(f"{path}: every row needs 4 finite values t,x,y,theta")
     return table[:, 0], table[:, 1:]
+
+
+def _read_table(path: Path, header: str, what: str) -> np.ndarray:
+    """The rows of a CSV sidecar under ``header``; errors name the file (and the line)."""
+    text = read_text(path, what)
+    lines = text.splitlines()
+    found = lines[0].strip() if lines else ""
+    if found.replace(" ", "") != header:
+        raise ValueError(f"{path}:1: expected the header {header!r}, got {_short(found)!r}")
+    columns = header.count(",") + 1
+    try:
+        table = np.loadtxt(lines[1:], delimiter=",", ndmin=2) if len(lines) > 1 else np.empty((0, columns))
+    except ValueError as error:
+        raise ValueError(f"{path}: {_short(str(error), 200)}") from error
+    if table.shape[1] != columns:
+        raise ValueError(f"{path}: every row needs {columns} values {header}")
+    return table
+
+
+def _short(text: str, limit: int = 60) -> str:
+    return text if len(text) <= limit else text[: limit - 3] + "..."
 
 
 #: Header of a filter's trajectory: the pose and its covariance's upper triangle (m^2, m rad, rad^2).
@@ -83,11 +122,7 @@ def write_trajectory(path: str | Path, times: np.ndarray, poses: np.ndarray, cov
 def read_trajectory(path: str | Path) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Read a trajectory written by ``write_trajectory``: times (R,), poses (R, 3), covariances (R, 3, 3)."""
     path = Path(path)
-    with path.open() as handle:
-        header = handle.readline().strip()
-    if header.replace(" ", "") != TRAJECTORY_HEADER:
-        raise ValueError(f"{path}:1: expected the header {TRAJECTORY_HEADER!r}, got {header!r}")
-    table = np.loadtxt(path, delimiter=",", skiprows=1, ndmin=2)
+    table = _read_table(path, TRAJECTORY_HEADER, "trajectory")
     covariances = np.zeros((len(table), 3, 3))
     covariances[:, _UPPER[0], _UPPER[1]] = table[:, 4:]
     covariances[:, _UPPER[1], _UPPER[0]] = table[:, 4:]
@@ -124,18 +159,33 @@ def read_map(path: str | Path) -> dict:
     """Read a map sidecar; ``walls`` (W, 4) and ``corners`` (K, 2) come back as float arrays."""
     path = Path(path)
     try:
-        document = json.loads(path.read_text())
+        document = json.loads(read_text(path, "map sidecar"))
     except json.JSONDecodeError as error:
         raise ValueError(f"{path}: not valid JSON: {error}") from error
+    if not isinstance(document, dict):
+        raise ValueError(f"{path}: a map sidecar is a JSON object, got {type(document).__name__}")
     missing = [key for key in ("walls", "corners", "sensor") if key not in document]
     if missing:
         raise ValueError(f"{path}: the map sidecar lacks {', '.join(missing)}")
-    document["walls"] = np.asarray(document["walls"], dtype=float).reshape(-1, 4)
-    document["corners"] = np.asarray(document["corners"], dtype=float).reshape(-1, 2)
+    for key, width in (("walls", 4), ("corners", 2)):
+        try:
+            document[key] = np.asarray(document[key], dtype=float).reshape(-1, width)
+        except (TypeError, ValueError):
+            raise ValueError(f"{path}: {key} must be a list of [{width} numbers]") from None
+        if not np.all(np.isfinite(document[key])):
+            raise ValueError(f"{path}: {key} holds a number that is not finite")
+    if document["sensor"] is not None and not isinstance(document["sensor"], dict):
+        raise ValueError(f"{path}: sensor must be an object (or null)")
     return document
 
 
 def beam_geometry(sensor: dict) -> BeamGeometry:
     """The ``BeamGeometry`` recorded in a map sidecar's ``sensor`` section."""
+    from mazeslam.config import ConfigError, from_mapping
+
     keys = ("first_beam_angle", "direction", "field_of_view", "mount_x", "mount_y")
-    return BeamGeometry(**{key: sensor[key] for key in keys if key in sensor})
+    try:
+        given = {key: sensor[key] for key in keys if sensor.get(key) is not None}
+        return from_mapping(BeamGeometry, given, "map sidecar [sensor]")
+    except ConfigError as error:
+        raise ValueError(str(error)) from error

@@ -222,6 +222,10 @@ class EvaluationParams:
 
     match_radius: float = 0.05
 
+    def __post_init__(self):
+        if not 0 < self.match_radius <= 100:
+            raise ValueError(f"match_radius must be in (0, 100] m, got {self.match_radius}")
+
 
 @dataclass(frozen=True)
 class SlamConfig:

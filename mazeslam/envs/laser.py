@@ -16,6 +16,7 @@ from numpy.typing import ArrayLike
 from mazeslam.beams import BeamGeometry
 from mazeslam.config import require
 from mazeslam.geometry import TWO_PI, transform_points
+from mazeslam.limits import beams_problem
 
 #: Angle (rad) by which a wall's angular extent is widened when choosing the beams to test.
 ANGLE_MARGIN = 1e-9
@@ -45,6 +46,8 @@ class LaserParams:
 
     def __post_init__(self):
         require(self.beams >= 1, f"laser beams must be at least 1, got {self.beams}")
+        too_many = beams_problem(self.beams)
+        require(too_many is None, f"laser beams: {too_many}")
         require(self.max_range > 0, f"laser max_range must be positive, got {self.max_range}")
         require(0 <= self.min_range < self.max_range,
                 f"laser min_range must be in [0, max_range), got {self.min_range}")

@@ -63,10 +63,10 @@ class Maze:
             raise ValueError(
                 f"wall arrays disagree: horizontal {self.horizontal.shape}, vertical {self.vertical.shape}"
             )
-        if not (0 < self.wall_thickness < self.cell_size):
+        if not (0 < self.wall_thickness < self.cell_size <= 1000):
             raise ValueError(
                 f"wall thickness {self.wall_thickness} m must be positive and below the cell size "
-                f"{self.cell_size} m"
+                f"{self.cell_size} m (at most 1000 m)"
             )
         closed = (
             self.horizontal[0].all() and self.horizontal[-1].all()
@@ -204,7 +204,9 @@ def parse_maze(text: str, source: str = "<text>") -> Maze:
         if not stripped or stripped.startswith("#"):
             continue
         if "=" not in stripped:
-            raise MazeFormatError(f"{source}:{number}: expected 'key = value' or the drawing, got {stripped!r}")
+            shown = stripped if len(stripped) <= 40 else stripped[:37] + "..."
+            raise MazeFormatError(f"{source}:{number}: not a maze file: expected 'key = value' or the '+---+' "
+                                  f"drawing, got {shown!r}")
         key, value = (part.strip() for part in stripped.split("=", 1))
         params[key] = value
     if len(drawing) < 3 or len(drawing) % 2 == 0:
@@ -217,6 +219,11 @@ def parse_maze(text: str, source: str = "<text>") -> Maze:
     if len(posts) < 2:
         raise MazeFormatError(f"{source}:{first_number}: a wall line needs at least two '+'")
     rows, cols = len(drawing) // 2, len(posts) - 1
+    from mazeslam.limits import maze_problem
+
+    too_big = maze_problem(rows, cols)
+    if too_big:
+        raise MazeFormatError(f"{source}: {too_big}")
     horizontal = np.zeros((rows + 1, cols), dtype=bool)
     vertical = np.zeros((rows, cols + 1), dtype=bool)
     for k, (number, line) in enumerate(drawing):
@@ -245,7 +252,7 @@ def parse_maze(text: str, source: str = "<text>") -> Maze:
     except ValueError as error:
         raise MazeFormatError(f"{source}: bad parameter value: {error}") from error
     if params:
-        raise MazeFormatError(f"{source}: unknown parameter(s) {', '.join(sorted(params))}")
+        raise MazeFormatError(f"{source}: unknown parameter(s) {', '.join(sorted(key[:40] for key in params))}")
     if len(start) != 2:
         raise MazeFormatError(f"{source}: start must be 'row col', got {start}")
     try:
@@ -256,9 +263,11 @@ def parse_maze(text: str, source: str = "<text>") -> Maze:
 
 def load_maze(path: str | Path) -> Maze:
     """Read a maze text file (see ``parse_maze``)."""
+    from mazeslam.config import InputError, read_text
+
     path = Path(path)
     try:
-        text = path.read_text()
-    except FileNotFoundError as error:
-        raise MazeFormatError(f"{path}: maze file not found") from error
+        text = read_text(path, "maze file")
+    except (FileNotFoundError, InputError) as error:
+        raise MazeFormatError(str(error)) from error
     return parse_maze(text, str(path))

@@ -7,6 +7,7 @@ the true pose, which the log never contains (the log only holds the noisy odomet
 
 from __future__ import annotations
 
+import math
 from collections import deque
 from dataclasses import dataclass
 from pathlib import Path
@@ -163,9 +164,11 @@ class ScriptedPolicy:
 
 def load_commands(path: str | Path) -> ScriptedPolicy:
     """A ``ScriptedPolicy`` from a text file of ``duration speed turn_rate`` lines ('#' comments)."""
+    from mazeslam.config import read_text
+
     path = Path(path)
     commands = []
-    for number, line in enumerate(path.read_text().splitlines(), start=1):
+    for number, line in enumerate(read_text(path, "commands file").splitlines(), start=1):
         line = line.split("#", 1)[0].strip()
         if not line:
             continue
@@ -173,7 +176,10 @@ def load_commands(path: str | Path) -> ScriptedPolicy:
         try:
             if len(parts) != 3:
                 raise ValueError(f"expected 'duration speed turn_rate', got {len(parts)} values")
-            commands.append([float(v) for v in parts])
+            values = [float(v) for v in parts]
+            if not all(math.isfinite(v) and abs(v) <= 1e6 for v in values):
+                raise ValueError(f"values must be finite numbers of sane size, got {' '.join(parts)}")
+            commands.append(values)
         except ValueError as error:
             raise ValueError(f"{path}:{number}: {error}") from error
     try:

@@ -24,6 +24,7 @@ from mazeslam.envs.odometry import OdometryParams, WheelEncoders
 from mazeslam.envs.policies import DriveParams, ExplorerPolicy
 from mazeslam.envs.walls import wall_geometry
 from mazeslam.envs.world import RobotParams, World
+from mazeslam.limits import duration_problem, maze_problem
 from mazeslam.log import LogWriter
 
 
@@ -44,6 +45,7 @@ class LoggerParams:
     def __post_init__(self):
         require(self.scan_period > 0, f"logger scan_period must be positive, got {self.scan_period}")
         require(self.odometry_rate > 0, f"logger odometry_rate must be positive, got {self.odometry_rate}")
+        require(self.physics_rate <= 10_000, f"logger physics_rate must be at most 10000 Hz, got {self.physics_rate}")
         require(self.physics_rate >= self.odometry_rate and self.physics_rate * self.scan_period >= 1,
                 f"logger physics_rate {self.physics_rate} Hz must be at least the odometry rate and "
                 f"one step per scan period")
@@ -61,6 +63,11 @@ class MazeParams:
 
     def __post_init__(self):
         require(self.rows >= 1 and self.cols >= 1, f"maze rows and cols must be >= 1, got {self.rows} x {self.cols}")
+        too_big = maze_problem(self.rows, self.cols)
+        require(too_big is None, f"maze rows x cols: {too_big}")
+        require(0 < self.wall_thickness < self.cell_size,
+                f"maze wall_thickness {self.wall_thickness} m must be positive and below cell_size {self.cell_size} m")
+        require(0 <= self.loop_fraction <= 1, f"maze loop_fraction must be in [0, 1], got {self.loop_fraction}")
 
 
 @dataclass(frozen=True)
@@ -81,6 +88,8 @@ class SimulationConfig:
 
     def __post_init__(self):
         require(self.max_duration > 0, f"max_duration must be positive, got {self.max_duration}")
+        too_long = duration_problem(self.max_duration)
+        require(too_long is None, f"max_duration: {too_long}")
         require(self.drive.cruise_speed <= self.robot.max_wheel_speed,
                 f"drive cruise_speed {self.drive.cruise_speed} m/s exceeds the robot's max_wheel_speed "
                 f"{self.robot.max_wheel_speed} m/s")
@@ -133,6 +142,8 @@ def simulate(
     config = config or SimulationConfig()
     if duration is not None:
         require(duration > 0, f"duration must be positive, got {duration}")
+        too_long = duration_problem(duration)
+        require(too_long is None, f"duration: {too_long}")
     maze_rng, drive_rng, slip_rng, laser_rng = (
         np.random.default_rng(s) for s in np.random.SeedSequence(seed).spawn(4)
     )

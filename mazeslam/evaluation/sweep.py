@@ -33,6 +33,8 @@ import hashlib
 import itertools
 import json
 import math
+import os
+import socket
 import tempfile
 import time
 import tomllib
@@ -44,17 +46,20 @@ import numpy as np
 import pandas as pd
 from tqdm.auto import tqdm
 
-from mazeslam.config import ConfigError, jsonable
+from mazeslam.config import ConfigError, InputError, check_setting, jsonable, read_text, with_changes
 from mazeslam.envs.simulator import SimulationConfig, load_config, simulate
 from mazeslam.evaluation.consistency import nis_summary
 from mazeslam.evaluation.metrics import apply_se2
 from mazeslam.evaluation.scoring import DEAD_RECKONING, FILTER_MEAN, score_run
+from mazeslam.limits import MAX_SEED, duration_problem
 from mazeslam.loaded_run import load_run
 from mazeslam.slam import SlamConfig, load_slam_config, slam_on_run
 from mazeslam.smooth_command import optimum_columns
 
 RESULTS = "runs.jsonl"
 MAPS = "maps"
+#: Runs of one sweep (grid cells times seeds).
+MAX_RUNS = 100_000
 
 
 @dataclass(frozen=True)
@@ -87,9 +92,9 @@ def load_sweep(path: str | Path) -> Sweep:
     """Read and check a sweep file; every grid key must name an existing setting."""
     path = Path(path)
     try:
-        document = tomllib.loads(path.read_text())
-    except FileNotFoundError as error:
-        raise ConfigError(f"{path}: sweep file not found") from error
+        document = tomllib.loads(read_text(path, "sweep file"))
+    except (FileNotFoundError, InputError) as error:
+        raise ConfigError(str(error)) from error
     except tomllib.TOMLDecodeError as error:
         raise ConfigError(f"{path}: not valid TOML: {error}") from error
     known = {"name", "seeds", "maze", "simulation_config", "slam_config", "duration", "grid"}
@@ -100,8 +105,20 @@ def load_sweep(path: str | Path) -> Sweep:
     if not isinstance(grid, dict) or not all(isinstance(v, list) and v for v in grid.values()):
         raise ConfigError(f"{path}: [grid] must map setting names to non-empty lists of values")
     seeds = document.get("seeds", [0])
-    if not isinstance(seeds, list) or not seeds or not all(isinstance(s, int) for s in seeds):
-        raise ConfigError(f"{path}: seeds must be a non-empty list of integers")
+    if not isinstance(seeds, list) or not seeds or not all(
+            isinstance(s, int) and not isinstance(s, bool) and 0 <= s <= MAX_SEED for s in seeds):
+        raise ConfigError(f"{path}: seeds must be a non-empty list of integers in 0..{MAX_SEED}")
+    for key in ("name", "maze", "simulation_config", "slam_config"):
+        if key in document and not isinstance(document[key], str):
+            raise ConfigError(f"{path}: {key} = {document[key]!r}: must be a text")
+    if "duration" in document:
+        check_setting(float, "duration", document["duration"], str(path))
+        problem = duration_problem(document["duration"]) if document["duration"] > 0 else "must be positive"
+        if problem:
+            raise ConfigError(f"{path}: duration = {document['duration']!r}: {problem}")
+    runs = math.prod(len(values) for values in grid.values()) * len(seeds)
+    if runs > MAX_RUNS:
+        raise ConfigError(f"{path}: the grid and seeds make {runs} runs; at most {MAX_RUNS}")
     base = path.parent
 
     def resolve(name):
@@ -163,7 +180,7 @@ def replace_setting(config, place: str, value):
         raise ConfigError(f"no setting {head!r} in {type(config).__name__} (known: {', '.join(sorted(names))})")
     if rest:
         return dataclasses.replace(config, **{head: replace_setting(getattr(config, head), rest, value)})
-    return dataclasses.replace(config, **{head: value})
+    return with_changes(config, **{head: value})
 
 
 def run_id(sweep: Sweep, run: dict) -> str:
@@ -227,17 +244,34 @@ def execute_run(sweep: Sweep, run: dict, maps_folder: str | None = None) -> dict
     return row
 
 
-def finished_runs(out_dir: Path) -> dict[str, dict]:
-    """The rows already in ``runs.jsonl`` by run id (a line cut off by a crash is ignored)."""
+def finished_runs(out_dir: Path, problems: list[str] | None = None) -> dict[str, dict]:
+    """The rows already in ``runs.jsonl`` by run id. A line that is not a result (cut off by a
+    crash, not JSON, JSON that is not an object with a run_id) is skipped; unless it is a torn last
+    line, why is appended to ``problems`` (``file:line: reason``)."""
     path = out_dir / RESULTS
-    rows = {}
-    if path.exists():
-        for line in path.read_text().splitlines():
-            try:
-                row = json.loads(line)
-            except json.JSONDecodeError:
-                continue
-            rows[row["run_id"]] = row
+    rows: dict[str, dict] = {}
+    if not path.exists():
+        return rows
+    try:
+        text = read_text(path, "sweep results file")
+    except InputError as error:
+        raise ConfigError(f"{error}; move it away to start the sweep afresh") from error
+    lines = text.splitlines()
+    for number, line in enumerate(lines, start=1):
+        if not line.strip():
+            continue
+        try:
+            row = json.loads(line)
+        except (json.JSONDecodeError, RecursionError):
+            if problems is not None and number < len(lines):  # the last line: a torn write, expected
+                problems.append(f"{path}:{number}: skipped: not JSON")
+            continue
+        if not isinstance(row, dict) or not isinstance(row.get("run_id"), str):
+            if problems is not None:
+                shown = line if len(line) <= 40 else line[:37] + "..."
+                problems.append(f"{path}:{number}: skipped: not a result (an object with a run_id): {shown}")
+            continue
+        rows[row["run_id"]] = row
     return rows
 
 
@@ -250,6 +284,7 @@ class SweepReport:
     reused: int
     seconds: float
     paths: dict = field(default_factory=dict)
+    skipped: list[str] = field(default_factory=list)
 
 
 def run_sweep(sweep: Sweep, out_dir: str | Path, workers: int | None = None, scheduler: str | None = None,
@@ -261,24 +296,87 @@ def run_sweep(sweep: Sweep, out_dir: str | Path, workers: int | None = None, sch
     """
     out_dir = Path(out_dir)
     (out_dir / MAPS).mkdir(parents=True, exist_ok=True)
-    (out_dir / "sweep.json").write_text(json.dumps({"name": sweep.name, "source": sweep.source, "grid": sweep.grid,
-                                                    "seeds": sweep.seeds}, indent=1) + "\n")
-    done = finished_runs(out_dir)
-    pending = [run for run in sweep.runs() if run_id(sweep, run) not in done]
-    started = time.perf_counter()
-    bar = tqdm(total=len(done) + len(pending), initial=len(done), desc=f"sweep {sweep.name}", unit="run",
-               disable=not progress)
-    with (out_dir / RESULTS).open("a") as results:
-        for row in _execute(sweep, pending, str(out_dir / MAPS), workers, scheduler):
-            results.write(json.dumps(jsonable(row), allow_nan=False) + "\n")
-            results.flush()
-            done[row["run_id"]] = row
-            bar.update(1)
-    bar.close()
-    order = {run_id(sweep, run): k for k, run in enumerate(sweep.runs())}
-    table = pd.DataFrame(sorted((r for r in done.values() if r["run_id"] in order), key=lambda r: order[r["run_id"]]))
-    paths = write_tables(table, list(sweep.grid), out_dir)
-    return SweepReport(table, len(pending), len(sweep.runs()) - len(pending), time.perf_counter() - started, paths)
+    with SweepLock(out_dir):
+        (out_dir / "sweep.json").write_text(json.dumps(jsonable({"name": sweep.name, "source": sweep.source,
+                                                                 "grid": sweep.grid, "seeds": sweep.seeds}),
+                                                       indent=1, allow_nan=False) + "\n")
+        skipped: list[str] = []
+        done = finished_runs(out_dir, skipped)
+        pending = [run for run in sweep.runs() if run_id(sweep, run) not in done]
+        started = time.perf_counter()
+        bar = tqdm(total=len(done) + len(pending), initial=len(done), desc=f"sweep {sweep.name}", unit="run",
+                   disable=not progress)
+        with (out_dir / RESULTS).open("a") as results:
+            if results.tell() and not (out_dir / RESULTS).read_bytes().endswith(b"\n"):
+                results.write("\n")  # after a torn last line, the next result starts a line of its own
+            for row in _execute(sweep, pending, str(out_dir / MAPS), workers, scheduler):
+                results.write(json.dumps(jsonable(row), allow_nan=False) + "\n")
+                results.flush()
+                done[row["run_id"]] = row
+                bar.update(1)
+        bar.close()
+        order = {run_id(sweep, run): k for k, run in enumerate(sweep.runs())}
+        table = pd.DataFrame(sorted((r for r in done.values() if r["run_id"] in order),
+                                    key=lambda r: order[r["run_id"]]))
+        paths = write_tables(table, list(sweep.grid), out_dir)
+    return SweepReport(table, len(pending), len(sweep.runs()) - len(pending), time.perf_counter() - started, paths,
+                       skipped)
+
+
+class SweepLock:
+    """An exclusive claim on a results folder (``sweep.lock``, created with O_EXCL, holding the
+    process id and host): a second sweep on the same folder stops with a message naming the
+    process that holds it, instead of running every run again. A lock left by a process that is
+    gone (on this host) is taken over."""
+
+    NAME = "sweep.lock"
+
+    def __init__(self, out_dir: Path):
+        self.path = Path(out_dir) / self.NAME
+        self.held = False
+
+    def __enter__(self) -> SweepLock:
+        for _ in range(2):
+            try:
+                handle = os.open(self.path, os.O_CREAT | os.O_EXCL | os.O_WRONLY, 0o644)
+            except FileExistsError:
+                holder = self._holder()
+                if holder is not None and self._alive(*holder):
+                    pid, host = holder
+                    message = (f"{self.path.parent}: another sweep (process {pid} on {host}) is writing to this "
+                               f"folder; wait for it to finish, or remove {self.path} if it is gone")
+                    raise ConfigError(message) from None
+                self.path.unlink(missing_ok=True)  # stale: its process is gone
+                continue
+            with os.fdopen(handle, "w") as lock:
+                lock.write(f"{os.getpid()} {socket.gethostname()}\n")
+            self.held = True
+            return self
+        raise ConfigError(f"{self.path}: could not take the sweep lock")
+
+    def __exit__(self, *exc_info) -> None:
+        if self.held:
+            self.path.unlink(missing_ok=True)
+            self.held = False
+
+    def _holder(self) -> tuple[int, str] | None:
+        try:
+            pid, host = self.path.read_text().split()[:2]
+            return int(pid), host
+        except (OSError, ValueError):
+            return None  # unreadable or half-written: treated as stale
+
+    @staticmethod
+    def _alive(pid: int, host: str) -> bool:
+        if host != socket.gethostname():
+            return True  # another machine's process: cannot tell, so respect its lock
+        try:
+            os.kill(pid, 0)
+        except ProcessLookupError:
+            return False
+        except PermissionError:
+            return True
+        return True
 
 
 def _execute(sweep: Sweep, runs: list[dict], maps_folder: str, workers: int | None, scheduler: str | None):

@@ -43,10 +43,12 @@ class CorrelativeParams:
     max_points: int = 90
 
     def __post_init__(self):
-        require(self.resolution > 0 and self.sigma > 0 and self.turn_step > 0,
-                "resolution, sigma and turn_step must be positive")
-        require(self.window_sigmas > 0, "window_sigmas must be positive")
-        require(self.candidates >= 1 and self.max_points >= 1, "candidates and max_points must be at least 1")
+        require(self.resolution >= 0.001 and self.sigma > 0 and self.turn_step >= 0.01,
+                f"resolution must be >= 0.001 m, sigma positive and turn_step >= 0.01 degrees, got "
+                f"{self.resolution}, {self.sigma}, {self.turn_step}")
+        require(0 < self.window_sigmas <= 100, f"window_sigmas must be in (0, 100], got {self.window_sigmas}")
+        require(1 <= self.candidates <= 1000 and 1 <= self.max_points <= 100_000,
+                "candidates must be in 1..1000 and max_points in 1..100000")
 
 
 class LikelihoodGrid:

@@ -122,7 +122,12 @@ class FastSLAMParams:
     seed: int = 0
 
     def __post_init__(self):
+        from mazeslam.limits import particles_problem
+
         require(self.NPARTICLES >= 1, f"NPARTICLES must be at least 1, got {self.NPARTICLES}")
+        too_many = particles_problem(self.NPARTICLES)
+        require(too_many is None, f"NPARTICLES: {too_many}")
+        require(self.seed >= 0, f"seed must be a non-negative integer, got {self.seed}")
         for name in ("sigmaR", "sigmaB"):
             require(getattr(self, name) >= 0, f"{name} must be >= 0, got {getattr(self, name)}")
         OdometryNoise(self.sigmaX, self.sigmaTH, self.sigmaTH_drive)  # checks the odometry terms
@@ -136,7 +141,8 @@ class FastSLAMParams:
         require(self.association in tuple(Association),
                 f"association must be one of {', '.join(Association)}, got {self.association!r}")
         object.__setattr__(self, "association", Association(self.association))
-        require(self.view_range >= 0 and self.tentative_limit >= 1, "view_range must be >= 0 and tentative_limit >= 1")
+        require(self.view_range >= 0 and 1 <= self.tentative_limit <= 1000,
+                "view_range must be >= 0 and tentative_limit in 1..1000")
         require(1 <= self.inflation < math.inf, f"inflation must be a factor >= 1, got {self.inflation}")
         require(0 < self.facing_gate <= 180, f"facing_gate must be in (0, 180] degrees, got {self.facing_gate}")
         require(self.version in PROPOSALS, f"version must be 1 or 2 (FastSLAM 1.0 or 2.0), got {self.version}")

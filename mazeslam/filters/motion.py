@@ -44,7 +44,7 @@ class OdometryNoise:
 
     def __post_init__(self):
         for name in ("sigmaX", "sigmaTH", "sigmaTH_drive"):
-            require(getattr(self, name) >= 0, f"{name} must be >= 0, got {getattr(self, name)}")
+            require(0 <= getattr(self, name) <= 10, f"{name} must be in [0, 10], got {getattr(self, name)}")
 
     def inflated(self, factor: float) -> OdometryNoise:
         """This noise with every variance multiplied by ``factor``."""

@@ -81,11 +81,14 @@ class ScanMatchParams:
         object.__setattr__(self, "correspondence_distances", tuple(self.correspondence_distances))
         require(self.point_noise > 0, "point_noise must be positive (m)")
         require(0 <= self.min_range < self.max_range, "need 0 <= min_range < max_range (m)")
-        require(self.neighbours >= 3, "neighbours must be at least 3 to define a surface")
+        require(3 <= self.neighbours <= 1000,
+                f"neighbours must be in 3..1000 to define a surface, got {self.neighbours}")
         require(0 < self.max_flatness <= 1, "max_flatness must be in (0, 1]")
         require(len(self.correspondence_distances) > 0 and all(d > 0 for d in self.correspondence_distances),
                 "correspondence_distances must be positive distances (m)")
-        require(self.iterations_per_stage >= 1, "iterations_per_stage must be at least 1")
+        require(1 <= self.iterations_per_stage <= 1000,
+                f"iterations_per_stage must be in 1..1000, got {self.iterations_per_stage}")
+        require(len(self.correspondence_distances) <= 100, "correspondence_distances: at most 100 stages")
         require(0 <= self.min_overlap <= 1, "min_overlap must be a fraction in [0, 1]")
         require(self.prior_floor > 0 and self.blind_sigma_xy > 0 and self.blind_sigma_th > 0,
                 "prior_floor, blind_sigma_xy and blind_sigma_th must be positive")

@@ -14,7 +14,6 @@ RLASER, SYNC, comments, ...) is counted and otherwise ignored.
 
 from __future__ import annotations
 
-import gzip
 import math
 from collections import Counter
 from dataclasses import dataclass, field
@@ -23,7 +22,9 @@ from pathlib import Path
 import numpy as np
 
 from mazeslam.beams import BeamGeometry
-from mazeslam.log import LogFormatError
+from mazeslam.config import read_text
+from mazeslam.limits import MAX_BEAMS
+from mazeslam.log import MAX_TIME, MAX_VALUE, LogFormatError
 
 
 @dataclass
@@ -60,7 +61,11 @@ class CarmenLog:
     def max_range(self) -> float:
         """The laser's maximum range (m): the ``robot_front_laser_max`` PARAM, else the largest reading."""
         value = self.params.get("robot_front_laser_max")
-        return float(value) if value is not None else float(self.ranges.max())
+        try:
+            limit = float(value) if value is not None else math.nan
+        except ValueError:
+            limit = math.nan
+        return limit if 0 < limit <= MAX_VALUE else float(self.ranges.max())
 
 
 def front_laser(n_beams: int) -> BeamGeometry:
@@ -71,10 +76,18 @@ def front_laser(n_beams: int) -> BeamGeometry:
     return BeamGeometry(first_beam_angle=-math.pi / 2, direction=1, field_of_view=step * (n_beams - 1))
 
 
-def _open_text(path: Path):
-    with path.open("rb") as probe:
-        gzipped = probe.read(2) == b"\x1f\x8b"
-    return gzip.open(path, "rt") if gzipped else path.open()
+def _lines(path: Path) -> list[str]:
+    """The lines of a plain or gzipped text file (read errors as one ``InputError`` naming it)."""
+    return read_text(path, "CARMEN log").splitlines()
+
+
+def _numbers(texts: list[str], what: str) -> list[float]:
+    """``texts`` as finite numbers of sane magnitude (``ValueError`` naming the bad one)."""
+    values = [float(v) for v in texts]
+    for text, value in zip(texts, values):
+        if not math.isfinite(value) or abs(value) > MAX_TIME:
+            raise ValueError(f"{what} value {text!r} is not a finite number of sane size")
+    return values
 
 
 def read_carmen(path: str | Path) -> CarmenLog:
@@ -83,32 +96,35 @@ def read_carmen(path: str | Path) -> CarmenLog:
     scans, odometry, params, sequence = [], [], {}, []
     ignored: Counter[str] = Counter()
     width: int | None = None
-    with _open_text(path) as handle:
-        for number, line in enumerate(handle, start=1):
-            parts = line.split()
-            if not parts:
-                continue
-            kind = parts[0]
-            try:
-                if kind == "FLASER":
-                    n = int(parts[1])
-                    if len(parts) < n + 9:
-                        raise ValueError(f"FLASER with {n} ranges needs {n + 9} values at least, got {len(parts)}")
-                    if width is not None and n != width:
-                        raise ValueError(f"FLASER has {n} ranges, earlier scans had {width}")
-                    width = n
-                    values = [float(v) for v in parts[2 : n + 8]]
-                    scans.append(values + [float(parts[n + 8])])
-                    sequence.append(("scan", len(scans) - 1))
-                elif kind == "ODOM":
-                    odometry.append([float(v) for v in parts[1:4]] + [float(parts[7])])
-                    sequence.append(("odom", len(odometry) - 1))
-                elif kind == "PARAM" and len(parts) >= 3:
-                    params[parts[1]] = parts[2]
-                else:
-                    ignored[kind] += 1
-            except (ValueError, IndexError) as error:
-                raise LogFormatError(str(path), number, f"bad {kind} line: {error}") from error
+    for number, line in enumerate(_lines(path), start=1):
+        parts = line.split()
+        if not parts:
+            continue
+        kind = parts[0]
+        try:
+            if kind == "FLASER":
+                n = int(parts[1])
+                if not 2 <= n <= MAX_BEAMS:
+                    raise ValueError(f"{n} ranges: a front laser has 2 to {MAX_BEAMS}")
+                if len(parts) < n + 9:
+                    raise ValueError(f"FLASER with {n} ranges needs {n + 9} values at least, got {len(parts)}")
+                if width is not None and n != width:
+                    raise ValueError(f"FLASER has {n} ranges, earlier scans had {width}")
+                values = _numbers(parts[2 : n + 8], "FLASER")
+                if min(values[:n]) < 0 or max(values[:n]) > MAX_VALUE:
+                    raise ValueError("a range is negative or implausibly large")
+                width = n
+                scans.append(values + _numbers([parts[n + 8]], "timestamp"))
+                sequence.append(("scan", len(scans) - 1))
+            elif kind == "ODOM":
+                odometry.append(_numbers(parts[1:4], "ODOM") + _numbers([parts[7]], "timestamp"))
+                sequence.append(("odom", len(odometry) - 1))
+            elif kind == "PARAM" and len(parts) >= 3:
+                params[parts[1]] = parts[2]
+            else:
+                ignored[kind[:40]] += 1
+        except (ValueError, IndexError) as error:
+            raise LogFormatError(str(path), number, f"bad {kind[:40]} line: {error}") from error
     if not scans:
         raise LogFormatError(str(path), 1, "no FLASER (front laser) lines in this CARMEN log")
     assert width is not None  # every FLASER line sets it, and there is one
@@ -130,10 +146,9 @@ def read_carmen(path: str | Path) -> CarmenLog:
 
 def is_carmen(path: str | Path) -> bool:
     """Whether a file looks like a CARMEN log (a FLASER, ODOM or PARAM line among its first 200)."""
-    with _open_text(Path(path)) as handle:
-        for _, line in zip(range(200), handle):
-            if line.split()[:1] in (["FLASER"], ["ODOM"], ["PARAM"]):
-                return True
+    for line in _lines(Path(path))[:200]:
+        if line.split()[:1] in (["FLASER"], ["ODOM"], ["PARAM"]):
+            return True
     return False
 
 

@@ -17,15 +17,15 @@ Measurements of other robots (subjects 1-5) and of unknown barcodes are left out
 
 from __future__ import annotations
 
-import gzip
 from collections import Counter
 from pathlib import Path
 
 import numpy as np
 
 from mazeslam import sidecars
+from mazeslam.config import read_text
 from mazeslam.geometry import wrap_angle
-from mazeslam.log import LogWriter
+from mazeslam.log import MAX_TIME, LogWriter
 
 ROBOT_SUBJECTS = range(1, 6)
 
@@ -33,14 +33,15 @@ ROBOT_SUBJECTS = range(1, 6)
 def _table(folder: Path, name: str, columns: int) -> np.ndarray:
     for candidate in (folder / name, folder / f"{name}.gz"):
         if candidate.exists():
-            opener = gzip.open if candidate.suffix == ".gz" else open
-            with opener(candidate, "rt") as handle:
-                try:
-                    table = np.loadtxt(handle, comments="#", ndmin=2)
-                except ValueError as error:
-                    raise ValueError(f"{candidate}: {error}") from error
+            text = read_text(candidate, "MRCLAM table")
+            try:
+                table = np.loadtxt(text.splitlines(), comments="#", ndmin=2)
+            except ValueError as error:
+                raise ValueError(f"{candidate}: {str(error)[:200]}") from error
             if table.shape[1] != columns:
                 raise ValueError(f"{candidate}: expected {columns} columns, found {table.shape[1]}")
+            if not np.all(np.isfinite(table)) or np.abs(table).max(initial=0) > MAX_TIME:
+                raise ValueError(f"{candidate}: holds a value that is not a finite number of sane size")
             return table
     raise FileNotFoundError(f"{folder}: neither {name} nor {name}.gz found")
 

@@ -6,6 +6,12 @@ writes an odometry record every ``1 / odometry_rate`` s (F_O_U) and a scan every
 camera goes away, the log written so far stays valid (every line complete), its sidecar is
 written, and ``RobotDisconnected`` is raised saying how many records were saved.
 
+Nothing recorded is lost when the recording is killed: the map sidecar (the beam geometry, and for
+a simulated robot the walls) is written before the first record, and a simulated robot's true pose
+is appended to the truth sidecar, flushed, just before each record's log line (so a recording
+killed between the two leaves one extra pose, which ``load_run`` drops). SIGTERM and SIGINT end
+the recording cleanly after the record in progress (``Recorder.stopped_by`` names the signal).
+
 Time comes from ``clock`` and passes in ``wait``: wall time and ``time.sleep`` for a real robot,
 the simulator's own clock and ``SimulatedRobot.advance`` for a simulated one (as fast as it can go).
 """
@@ -13,7 +19,9 @@ the simulator's own clock and ``SimulatedRobot.advance`` for a simulated one (as
 from __future__ import annotations
 
 import math
+import signal
 import sys
+import threading
 import time
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -120,19 +128,23 @@ class Recorder:
             self.clock = clock or time.monotonic
             self.wait = wait or time.sleep
         self.records = 0
-        self._times: list[float] = []
-        self._poses: list[np.ndarray] = []
+        self.stopped_by: str | None = None
+        self._truth: sidecars.TruthWriter | None = None
 
     def run(self, controller, duration: float = math.inf, status=None) -> int:
         """Record until the controller quits or ``duration`` s pass; returns the records written."""
+        writer = LogWriter(self.out, self.beams)
+        self._write_map()
+        if isinstance(self.robot, SimulatedRobot):
+            self._truth = sidecars.TruthWriter(sidecars.truth_path(self.out))
+        previous = self._catch_signals()
         start = self.clock()
         next_odometry, next_scan = self.odometry_period, self.scan_period
-        writer = LogWriter(self.out, self.beams)
         try:
             while True:
                 t = self.clock() - start
                 command = controller(t)
-                if command.quit or t >= duration:
+                if command.quit or t >= duration or self.stopped_by is not None:
                     break
                 half = 0.5 * command.turn_rate * self.wheelbase
                 self.robot.set_wheel_speeds(command.speed - half, command.speed + half)
@@ -143,8 +155,9 @@ class Recorder:
                 self._write_odometry(writer, t)
                 next_odometry = event + self.odometry_period if next_odometry <= event + 1e-9 else next_odometry
                 if scan_due:
-                    writer.write_scan(t, self.robot.read_scan())
+                    ranges = self.robot.read_scan()
                     self._note(t)
+                    writer.write_scan(t, ranges)
                     next_scan = event + self.scan_period
                 if status is not None:
                     status(t, command, self.records)
@@ -152,8 +165,10 @@ class Recorder:
             raise RobotDisconnected(f"{error}; the log {self.out} keeps the {self.records} records written "
                                     f"before it") from error
         finally:
+            self._restore_signals(previous)
             writer.close()
-            self._write_sidecars()
+            if self._truth is not None:
+                self._truth.close()
             try:
                 self.robot.set_wheel_speeds(0.0, 0.0)
             except RobotError:
@@ -162,24 +177,39 @@ class Recorder:
 
     def _write_odometry(self, writer: LogWriter, t: float) -> None:
         distance, turn = self.robot.read_odometry()
-        writer.write_odometry(t, distance, turn)
         self._note(t)
+        writer.write_odometry(t, distance, turn)
 
     def _note(self, t: float) -> None:
+        """Count a record about to be written; its true pose goes to the truth sidecar first."""
         self.records += 1
-        if isinstance(self.robot, SimulatedRobot):
-            self._times.append(t)
-            self._poses.append(self.robot.pose)
+        if self._truth is not None and isinstance(self.robot, SimulatedRobot):
+            self._truth.write(t, self.robot.pose)
 
-    def _write_sidecars(self) -> None:
+    def _catch_signals(self) -> dict:
+        """SIGTERM and SIGINT set ``stopped_by`` (the loop ends after the record in progress);
+        returns the handlers to restore. Only the main thread can set handlers: elsewhere, none."""
+        if threading.current_thread() is not threading.main_thread():
+            return {}
+
+        def stop(number, frame):
+            self.stopped_by = signal.Signals(number).name
+
+        return {number: signal.signal(number, stop) for number in (signal.SIGTERM, signal.SIGINT)}
+
+    @staticmethod
+    def _restore_signals(previous: dict) -> None:
+        for number, handler in previous.items():
+            signal.signal(number, handler)
+
+    def _write_map(self) -> None:
+        """The map sidecar, before the first record: the beam geometry (and a simulated robot's walls)."""
         sensor = {"beams": self.beams, **self.geometry.to_dict()}
         if isinstance(self.robot, SimulatedRobot):
             walls = self.robot.walls
             sidecars.write_map(sidecars.map_path(self.out), walls.surfaces, walls.corners, sensor,
                                corner_convex=walls.corner_convex.tolist(), start_pose=self.robot.start_pose.tolist(),
                                source="mazeslam record --sim")
-            if self._times:
-                sidecars.write_truth(sidecars.truth_path(self.out), np.array(self._times), np.array(self._poses))
         else:
             sidecars.write_map(sidecars.map_path(self.out), np.empty((0, 4)), np.empty((0, 2)), sensor,
                                source="mazeslam record (real robot: no ground truth)")
