@@ -2,7 +2,9 @@
 
     python experiments/failure_cases/collect.py     (after running each case's sweep.toml)
 
-Writes table.md beside this file: per case and filter variant, the mean over the seeds.
+Writes table.md beside this file: per case and filter variant, the mean over the seeds (median NEES:
+each run's median over its records, then the mean over the seeds; NIS: mean over the associated
+observations; resampled: share of scans; optimum: the batch least-squares solution of the same log).
 """
 
 from pathlib import Path
@@ -13,7 +15,7 @@ HERE = Path(__file__).resolve().parent
 CASES = ["default", "long_corridor", "wide_room", "narrow", "symmetric", "sparse_turns", "few_points"]
 VARIANT = "slam.fastslam.version+slam.fastslam.NPARTICLES"
 NAMES = {"1/100": "FastSLAM 1.0, 100 particles", "2/100": "FastSLAM 2.0, 100 particles",
-         "1/1000": "FastSLAM 1.0, 1000 particles"}
+         "2/1000": "FastSLAM 2.0, 1000 particles"}
 
 
 def main():
@@ -30,7 +32,11 @@ def main():
                 "ATE aligned [cm]": 100 * group.ate_aligned_rmse.mean(),
                 "map aligned [cm]": 100 * group.map_aligned_rmse.mean(),
                 "landmarks / true corners": f"{group.landmarks.mean():.1f} / {group.true_corners.iloc[0]}",
-                "spurious": group.spurious_landmarks.mean(), "median ESS": group.ess_median.mean(),
+                "ATE / optimum's": group.optimum_ratio.mean(),
+                "aligned / optimum's": group.optimum_aligned_ratio.mean(),
+                "spurious": group.spurious_landmarks.mean(), "median NEES": group.median_nees.mean(),
+                "NIS mean": group.nis_mean.mean(), "resampled": group.resampled_fraction.mean(),
+                "median ESS": group.ess_median.mean(),
                 "new per scan": group.new_per_scan.mean(), "ambiguous per scan": group.ambiguous_per_scan.mean(),
             })
     result = pd.DataFrame(rows)
