@@ -53,9 +53,12 @@ class Number(click.ParamType):
         return number
 
     def _range(self) -> str:
-        low = "" if self.low is None else f"{self.low:g}{' <' if self.low_open else ' <='} "
-        high = "" if self.high is None else f" <= {self.high:g}"
+        low = "" if self.low is None else f"{self._shown(self.low)}{' <' if self.low_open else ' <='} "
+        high = "" if self.high is None else f" <= {self._shown(self.high)}"
         return f"the range {low}x{high}" if (low or high) else "range"
+
+    def _shown(self, bound: float) -> str:
+        return str(int(bound)) if self.integer else f"{bound:g}"
 
     def get_metavar(self, param, ctx=None):  # click 8.1 (param) and 8.2 (param, ctx)
         return "INTEGER" if self.integer else "FLOAT"

@@ -29,7 +29,7 @@ import numpy as np
 
 from mazeslam import sidecars
 from mazeslam.beams import SensorOverrides
-from mazeslam.config import jsonable, with_changes
+from mazeslam.config import InputError, jsonable, read_text, with_changes
 from mazeslam.evaluation.consistency import nees_summary
 from mazeslam.evaluation.metrics import (
     align_se2,
@@ -141,7 +141,15 @@ def from_run_identities(run: LoadedRun, run_dir: str | Path, radius: float):
     if len(poses) != len(run.log):
         raise ValueError(f"{paths[0]}: {len(poses)} poses for the {len(run.log)} records of {run.path}: "
                          "a run of another log?")
-    return map_identities(run, poses, json.loads(paths[1].read_text())["landmarks"], radius)
+    try:
+        landmarks = np.asarray(json.loads(read_text(paths[1], "map"))["landmarks"], dtype=float).reshape(-1, 2)
+    except (json.JSONDecodeError, KeyError, TypeError, ValueError) as error:
+        if isinstance(error, InputError):
+            raise
+        raise ValueError(f"{paths[1]}: not the map of a `mazeslam slam` run (a 'landmarks' list of [x, y])") from error
+    if not np.isfinite(landmarks).all():
+        raise ValueError(f"{paths[1]}: a landmark is not finite")
+    return map_identities(run, poses, landmarks, radius)
 
 
 def map_identities(run: LoadedRun, poses: np.ndarray, landmarks, radius: float):
