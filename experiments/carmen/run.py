@@ -29,9 +29,9 @@ import pandas as pd  # noqa: E402
 from mazeslam.evaluation import slam_report  # noqa: E402
 from mazeslam.evaluation.metrics import absolute_trajectory_error  # noqa: E402
 from mazeslam.filters.motion import dead_reckoning  # noqa: E402
+from mazeslam.filters.scan_matching import LaserOdometry, laser_odometry  # noqa: E402
 from mazeslam.imports.carmen import import_carmen  # noqa: E402
 from mazeslam.loaded_run import LoadedRun, load_run  # noqa: E402
-from mazeslam.filters.scan_matching import LaserOdometry, laser_odometry  # noqa: E402
 from mazeslam.slam import SlamConfig, load_slam_config, slam_on_run  # noqa: E402
 
 HERE = Path(__file__).resolve().parent
@@ -77,7 +77,8 @@ def evaluate(name: str, seeds: int, out: Path) -> dict:
                   key=lambda run: run["ate"])
     median = runs[len(runs) // 2]
     row = {"log": name, "scans": len(scans), "particles": config.fastslam.NPARTICLES}
-    row["odometry ATE [m]"], row["odometry aligned [m]"] = ate(dead_reckoning(course_log, start)[scans], reference[scans])
+    reckoned = dead_reckoning(course_log, start)[scans]
+    row["odometry ATE [m]"], row["odometry aligned [m]"] = ate(reckoned, reference[scans])
     row["laser odometry ATE [m]"], row["laser odometry aligned [m]"] = ate(laser.poses(start), reference[scans])
     row["FastSLAM ATE [m] (median)"] = float(np.median([run["ate"] for run in runs]))
     row["FastSLAM ATE [m] (worst)"] = runs[-1]["ate"]

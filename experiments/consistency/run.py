@@ -16,7 +16,6 @@ import tempfile
 from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 
-import numpy as np
 import pandas as pd
 
 from mazeslam import simulate
@@ -98,11 +97,12 @@ def main() -> None:
     parser.add_argument("--workers", type=int, default=2)
     parser.add_argument("--out", type=Path, default=HERE)
     parser.add_argument("--set", nargs="*", default=[], metavar="NAME=VALUE",
-                        help="[fastslam] settings to change, e.g. sigmaX=0.003 (for studies; the committed tables use none)")
+                        help="[fastslam] settings to change, e.g. sigmaX=0.003 (studies; the committed tables use none)")
     arguments = parser.parse_args()
     changes = {name: float(value) for name, value in (item.split("=") for item in arguments.set)}
     with ProcessPoolExecutor(arguments.workers) as pool:
-        futures = [pool.submit(one_log, seed, arguments.particles, arguments.versions, changes) for seed in arguments.seeds]
+        futures = [pool.submit(one_log, seed, arguments.particles, arguments.versions, changes)
+                   for seed in arguments.seeds]
         table = pd.DataFrame([row for future in futures for row in future.result()])
     arguments.out.mkdir(parents=True, exist_ok=True)
     table.drop(columns="nees").to_csv(arguments.out / "results.csv", index=False, float_format="%.6g")

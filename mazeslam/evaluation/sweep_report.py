@@ -100,8 +100,8 @@ def _plot_against(table: pd.DataFrame, key: str, others: list[str], out_dir: Pat
     summary = summarise(table, [key] + others, [spec[0] for spec in plotted] + ["reckoning_ate_rmse"])
     columns = 4
     rows = math.ceil(len(plotted) / columns)
-    fig, axes = plt.subplots(rows, columns, figsize=(4.3 * columns, 3.5 * rows + 1.0), squeeze=False)
-    axes = list(axes.flat)
+    fig, grid = plt.subplots(rows, columns, figsize=(4.3 * columns, 3.5 * rows + 1.0), squeeze=False)
+    axes = list(grid.flat)
     for ax in axes[len(plotted):]:
         ax.axis("off")
     groups = list(summary.groupby(others)) if others else [((), summary)]
