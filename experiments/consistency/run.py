@@ -97,7 +97,7 @@ def main() -> None:
     parser.add_argument("--workers", type=int, default=2)
     parser.add_argument("--out", type=Path, default=HERE)
     parser.add_argument("--set", nargs="*", default=[], metavar="NAME=VALUE",
-                        help="[fastslam] settings to change, e.g. sigmaX=0.003 (studies; the committed tables use none)")
+                        help="[fastslam] settings to change, e.g. sigmaX=0.003 (studies; committed tables use none)")
     arguments = parser.parse_args()
     changes = {name: float(value) for name, value in (item.split("=") for item in arguments.set)}
     with ProcessPoolExecutor(arguments.workers) as pool:
