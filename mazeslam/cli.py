@@ -212,7 +212,8 @@ def corners(log_file, scan_number, plot_path, animation_path, json_path, config_
 @click.option("--config", "config_path", type=click.Path(exists=True, dir_okay=False, path_type=Path),
               help="FastSLAM TOML with [fastslam], [corners], [sensor] (see configs/fastslam.toml).")
 @click.option("--out", "out_dir", type=click.Path(file_okay=False, path_type=Path),
-              help="Folder for trajectory.csv, map.json, slam.png [default: beside the log, <name>.slam/].")
+              help="Folder for trajectory.csv, map.json, slam.png, occupancy.pgm/.yaml [default: runs/<log name>/slam/ "
+                   "under the current directory]; a rerun replaces the files of the last run.")
 @click.option("--seed", type=SEED, help="Seed of the filter's random draws [default: from the config, 0].")
 @click.option("--association", type=click.Choice(["unknown", "known"]),
               help="unknown: maximum likelihood with a gate; known: the landmark records' identities.")
@@ -226,11 +227,15 @@ def slam(log_file, particles, config_path, out_dir, seed, association, version, 
     from mazeslam.slam_command import run_slam_command
 
     overrides = _geometry_overrides(first_beam_angle, beam_direction, mount_x)
-    out_dir = prepare_output_folder(out_dir or log_file.with_name(f"{log_file.stem}.slam"))
+    from mazeslam.run_folders import SLAM_FILES, clear_outputs, default_out_dir
+
+    out_dir = prepare_output_folder(out_dir or default_out_dir(log_file, "slam"))
+    clear_outputs(out_dir, SLAM_FILES)
     filter_changes = {"NPARTICLES": particles, "seed": seed, "association": association,
                       "version": int(version) if version else None}
     lines = run_slam_command(log_file, config_path, out_dir, filter_changes, overrides, animate, not quiet)
     click.echo("\n".join(lines))
+    click.echo(f"results in {out_dir}")
 
 
 @main.command()
@@ -241,7 +246,8 @@ def slam(log_file, particles, config_path, out_dir, seed, association, version, 
               help="known: the true corners (truth and map sidecars); from-run: the map of a `mazeslam slam` run.")
 @click.argument("run_dir", required=False, type=click.Path(exists=True, file_okay=False, path_type=Path))
 @click.option("--out", "out_dir", type=click.Path(file_okay=False, path_type=Path),
-              help="Folder for trajectory.csv, map.json, smooth.png [default: beside the log, <name>.smooth/].")
+              help="Folder for trajectory.csv, map.json, smooth.png [default: runs/<log name>/smooth/ under the "
+                   "current directory]; a rerun replaces the files of the last run.")
 @beam_geometry_options
 def smooth(log_file, config_path, association, run_dir, out_dir, first_beam_angle, beam_direction, mount_x):
     """Batch least-squares SLAM over the whole log: the optimum FastSLAM is measured against.
@@ -251,9 +257,16 @@ def smooth(log_file, config_path, association, run_dir, out_dir, first_beam_angl
 
     if (association == "from-run") != (run_dir is not None):
         raise click.UsageError("RUN_DIR goes with --association from-run, and only with it")
-    out_dir = prepare_output_folder(out_dir or log_file.with_name(f"{log_file.stem}.smooth"))
+    from mazeslam.run_folders import SMOOTH_FILES, clear_outputs, default_out_dir
+
+    out_dir = out_dir or default_out_dir(log_file, "smooth")
+    if run_dir is not None and out_dir.resolve() == run_dir.resolve():
+        raise click.UsageError("--out is RUN_DIR: the smoother would replace the run it reads; give another folder")
+    out_dir = prepare_output_folder(out_dir)
+    clear_outputs(out_dir, SMOOTH_FILES)
     overrides = _geometry_overrides(first_beam_angle, beam_direction, mount_x)
     click.echo("\n".join(run_smooth_command(log_file, config_path, out_dir, association, run_dir, overrides)))
+    click.echo(f"results in {out_dir}")
 
 
 @main.command()
