@@ -12,6 +12,7 @@ from mazeslam.beams import SensorOverrides
 from mazeslam.config import with_changes
 from mazeslam.evaluation import slam_report
 from mazeslam.evaluation.consistency import EXPLANATION, OBSERVATION_BOUND_95, POSE_BOUND_95, nis_summary
+from mazeslam.evaluation.map_export import export_map
 from mazeslam.evaluation.scoring import RPE_DISTANCE, score_run
 from mazeslam.loaded_run import LoadedRun, load_run
 from mazeslam.slam import SlamConfig, SlamResult, load_slam_config, slam_on_run
@@ -23,7 +24,8 @@ ANIMATION_FRAMES = 150
 
 def run_slam_command(log_file, config_path, out_dir, filter_changes: dict | None = None,
                      sensor: SensorOverrides | None = None, animate=False, progress=True) -> list[str]:
-    """Run, write ``out_dir``/{trajectory.csv, best_trajectory.csv, map.json, slam.png[, slam.gif]};
+    """Run, write ``out_dir``/{trajectory.csv, best_trajectory.csv, map.json, slam.png, occupancy.pgm/.yaml/.png,
+    landmarks.csv[, slam.gif]};
     return the lines to print. ``filter_changes`` replace ``[fastslam]`` settings and ``sensor``
     the ``[sensor]`` ones (None values: keep the config's)."""
     config = load_slam_config(config_path)
@@ -67,6 +69,8 @@ def run_slam_command(log_file, config_path, out_dir, filter_changes: dict | None
                                             title=f"{run.path.name}: FastSLAM, {config.fastslam.NPARTICLES} particles",
                                             true_landmarks=run.true_corners if run.world is not None else None,
                                             truth_label=truth_label)
+    paths.update(export_map(out_dir, run.log, result.mean_poses, run.geometry, result.landmarks,
+                            result.landmark_covariances, config.corners.min_range, config.corners.max_range))
     if animate:
         paths["animation"] = slam_report.animate_slam(Path(out_dir) / "slam.gif", result, points, run.truth, run.walls)
     lines.append("wrote " + ", ".join(str(p) for p in paths.values()))
