@@ -8,7 +8,6 @@ from __future__ import annotations
 
 import cv2
 import numpy as np
-
 from run import CARMEN, LOGS, RESULTS
 
 SIZE = 700

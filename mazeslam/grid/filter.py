@@ -107,7 +107,8 @@ class GridSlamParams:
         require(self.linear_update >= 0 and self.angular_update >= 0, "update thresholds must be >= 0")
         require(len(self.kernel_step) == 3 and all(s > 0 for s in self.kernel_step), "kernel_step: 3 positive steps")
         require(0 <= self.resample_threshold <= 1, "resample_threshold must be a fraction")
-        require(self.observation_gain > 0 and self.motion_floor > 0, "observation_gain and motion_floor must be positive")
+        require(self.observation_gain > 0 and self.motion_floor > 0,
+                "observation_gain and motion_floor must be positive")
 
     @property
     def rescue_covariance(self) -> np.ndarray:
@@ -314,7 +315,8 @@ class GridSlamResult:
     def total_seconds(self) -> float:
         return float(self.seconds.sum() + self.motion_seconds)
 
-    def record_trajectory(self, course_log: CourseLog, start_pose, which: str = "best") -> tuple[np.ndarray, np.ndarray]:
+    def record_trajectory(self, course_log: CourseLog, start_pose,
+                          which: str = "best") -> tuple[np.ndarray, np.ndarray]:
         """Poses (R, 3) and covariances (R, 3, 3) at every record of ``course_log``, as
         ``sidecars.write_trajectory`` takes them: a record keeps the pose of the last scan at or
         before it (``start_pose`` and zero covariance before the first). ``which``: "best" or "mean"."""
