@@ -11,6 +11,9 @@ With ``--record`` the episode is written as a course log with truth and map side
 
     python examples/frontier_agent.py --record runs/frontier.log
     mazeslam slam runs/frontier.log
+
+``--render`` shows the agent in a window as it drives; ``--video runs/videos`` writes an MP4 of the
+episode (Gymnasium's RecordVideo; needs ``pip install 'mazeslam[video]'``, which brings moviepy).
 """
 
 import argparse
@@ -97,8 +100,15 @@ def main():
     parser.add_argument("--rows", type=int, default=4)
     parser.add_argument("--cols", type=int, default=4)
     parser.add_argument("--record", help="write the episode as a course log here (sidecars beside it)")
+    parser.add_argument("--render", action="store_true", help="show the agent in a window as it drives")
+    parser.add_argument("--video", metavar="FOLDER", help="record the episode as an MP4 into FOLDER (needs moviepy: "
+                        "pip install 'mazeslam[video]')")
     args = parser.parse_args()
-    env = gym.make("mazeslam/Maze-v0", rows=args.rows, cols=args.cols, max_steps=args.steps)
+    render_mode = "human" if args.render else "rgb_array" if args.video else None
+    env = gym.make("mazeslam/Maze-v0", rows=args.rows, cols=args.cols, max_episode_steps=args.steps,
+                   render_mode=render_mode)
+    if args.video:
+        env = gym.wrappers.RecordVideo(env, args.video, name_prefix="frontier_agent", disable_logger=True)
     if args.record:
         env = RecordCourseLog(env, args.record)
     observation, info = env.reset(seed=args.seed)

@@ -1,6 +1,9 @@
 """A random agent in mazeslam/Maze-v0: how much of the maze does chance explore?
 
-    python examples/random_agent.py [--steps 2000] [--seed 0]
+    python examples/random_agent.py [--steps 2000] [--seed 0] [--render] [--video runs/videos]
+
+--render shows the agent in a window as it drives; --video writes an MP4 of the episode into that
+folder (Gymnasium's RecordVideo; needs `pip install 'mazeslam[video]'`, which brings moviepy).
 """
 
 import argparse
@@ -14,8 +17,13 @@ def main():
     parser = argparse.ArgumentParser(description=__doc__)
     parser.add_argument("--steps", type=int, default=2000)
     parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--render", action="store_true", help="show the agent in a window as it drives")
+    parser.add_argument("--video", metavar="FOLDER", help="record the episode as an MP4 into FOLDER (needs moviepy)")
     args = parser.parse_args()
-    env = gym.make("mazeslam/Maze-v0", max_steps=args.steps)
+    render_mode = "human" if args.render else "rgb_array" if args.video else None
+    env = gym.make("mazeslam/Maze-v0", max_episode_steps=args.steps, render_mode=render_mode)
+    if args.video:
+        env = gym.wrappers.RecordVideo(env, args.video, name_prefix="random_agent", disable_logger=True)
     env.action_space.seed(args.seed)
     observation, info = env.reset(seed=args.seed)
     total, collisions, steps_taken = 0.0, 0, 0
@@ -26,6 +34,7 @@ def main():
         collisions += info["collision"]
         if terminated or truncated:
             break
+    env.close()
     print(f"random agent: {steps_taken} steps, reward {total:.1f}, cells visited {info['visited']:.0%}, "
           f"walls seen {info['coverage']:.0%}, steps touching a wall {collisions}")
 

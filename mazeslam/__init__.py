@@ -4,8 +4,9 @@ The stages (see docs/architecture.md): simulate a maze run or record a real one 
 truth and map sidecars) -> corners -> FastSLAM -> metrics. Start with ``mazeslam.simulate`` and
 ``mazeslam.log.read``.
 
-Importing the package registers the Gymnasium environment ``mazeslam/Maze-v0`` (its vector entry
-point: ``mazeslam.envs.vector_env.MazeVectorEnv``, batched numpy physics) and loads nothing
+Importing the package registers the Gymnasium environment ``mazeslam/Maze-v0`` (truncated after
+``MAX_EPISODE_STEPS``; its vector entry point ``make_vector_env``: ``mazeslam.envs.vector_env.MazeVectorEnv``,
+batched numpy physics) and loads nothing
 heavier than Gymnasium itself (which has no lazy plugin registration since 1.0): the simulator
 (pymunk) loads on first use of ``mazeslam.simulate`` or ``mazeslam.SimulationConfig``, plotting,
 tables and the camera only in the modules that need them.
@@ -16,9 +17,22 @@ import gymnasium
 __all__ = ["SimulationConfig", "simulate"]
 __version__ = "0.1.0"
 
+#: Steps (0.1 s each) before ``mazeslam/Maze-v0`` truncates an episode (``env.spec.max_episode_steps``).
+MAX_EPISODE_STEPS = 3000
+
+
+def make_vector_env(num_envs: int = 1, max_episode_steps: int | None = None, max_steps: int | None = None, **kwargs):
+    """The vector entry point: ``MazeVectorEnv`` truncating after ``max_steps`` if given, else after
+    ``max_episode_steps`` (the registration's, which ``gym.make_vec`` passes)."""
+    from mazeslam.envs.vector_env import MazeVectorEnv
+
+    limit = max_steps if max_steps is not None else max_episode_steps or MAX_EPISODE_STEPS
+    return MazeVectorEnv(num_envs=num_envs, max_steps=limit, **kwargs)
+
+
 if "mazeslam/Maze-v0" not in gymnasium.registry:
     gymnasium.register(id="mazeslam/Maze-v0", entry_point="mazeslam.envs.maze_env:MazeEnv",
-                       vector_entry_point="mazeslam.envs.vector_env:MazeVectorEnv")
+                       vector_entry_point="mazeslam:make_vector_env", max_episode_steps=MAX_EPISODE_STEPS)
 
 
 def __getattr__(name: str):

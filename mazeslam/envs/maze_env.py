@@ -33,12 +33,16 @@ class MazeEnv(DriveEnv):
 
     ## Starting state
     A random R x C maze drawn at every reset, perfect by default (``loop_fraction=0``: one path
-    between any two cells), or a given ``Maze`` / maze file; the robot at the centre of a random cell
-    with a random heading. ``reset(options=...)`` may override ``maze``, ``rows``, ``cols``,
-    ``loop_fraction``, ``start_cell`` and ``start_heading``.
+    between any two cells; unlike ``mazeslam simulate``, whose random mazes have 15 % of their inner
+    walls removed for loops: pass ``loop_fraction=0.15`` for those), or a given ``Maze`` / maze file;
+    the robot at the centre of a random cell with a random heading. ``reset(options=...)`` may
+    override ``maze``, ``rows``, ``cols``, ``loop_fraction``, ``start_cell`` and ``start_heading``.
 
     ## Episode end
-    Terminated when every cell has been visited; truncated after ``max_steps`` steps.
+    Terminated when every cell has been visited. Truncated by Gymnasium's ``TimeLimit``: the
+    registration's ``max_episode_steps`` (3000 steps, 300 s simulated; ``gym.make(...,
+    max_episode_steps=N)`` to change it, ``env.spec.max_episode_steps`` to read it). ``max_steps``
+    (None by default) makes the environment truncate itself too, for use without ``gym.make``.
 
     ## Info
     | key          | meaning                                   |
@@ -56,12 +60,13 @@ class MazeEnv(DriveEnv):
     metadata = {"render_modes": ["human", "rgb_array"], "render_fps": 10}
 
     def __init__(self, render_mode: str | None = None, config: SimulationConfig | None = None, rows: int = 4,
-                 cols: int = 4, maze: Maze | str | None = None, loop_fraction: float = 0.0, max_steps: int = 3000,
-                 control_period: float = 0.1, action_type: str = "velocity", wall_reward: float = 10.0,
-                 cell_reward: float = 1.0, collision_penalty: float = 0.5):
+                 cols: int = 4, maze: Maze | str | None = None, loop_fraction: float = 0.0,
+                 max_steps: int | None = None, control_period: float = 0.1, action_type: str = "velocity",
+                 wall_reward: float = 10.0, cell_reward: float = 1.0, collision_penalty: float = 0.5):
         if render_mode is not None and render_mode not in self.metadata["render_modes"]:
             raise ValueError(f"render_mode must be one of {self.metadata['render_modes']} or None, got {render_mode!r}")
-        super().__init__(config, max_steps, control_period, action_type)
+        super().__init__(config, max_steps or 1, control_period, action_type)  # checks the settings
+        self.max_steps: int | None = max_steps  # type: ignore[assignment]  # None: TimeLimit truncates
         self.render_mode = render_mode
         self.rows, self.cols, self.maze_option, self.loop_fraction = rows, cols, maze, loop_fraction
         self.wall_reward, self.cell_reward, self.collision_penalty = wall_reward, cell_reward, collision_penalty
@@ -100,7 +105,7 @@ class MazeEnv(DriveEnv):
         reward = (self.wall_reward * newly_seen * WALL_SAMPLE_SPACING + self.cell_reward * new_cell
                   - self.collision_penalty * collision)
         terminated = bool(self.visited.all())
-        truncated = self.steps >= self.max_steps
+        truncated = self.max_steps is not None and self.steps >= self.max_steps
         if self.render_mode == "human":
             self.render()
         return self._observation(distance, turn), float(reward), terminated, truncated, self._info(collision)
