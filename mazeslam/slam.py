@@ -8,6 +8,7 @@ match to the one before instead, and odometry records only inform that match.
 
 from __future__ import annotations
 
+import enum
 import math
 import time
 from dataclasses import dataclass, field
@@ -23,6 +24,7 @@ from mazeslam.filters.corners import CornerExtractor, CornerParams
 from mazeslam.filters.fastslam import Association, FastSLAM, FastSLAMParams, UpdateReport
 from mazeslam.filters.scan_matching import LaserOdometry, ScanMatchParams, laser_odometry
 from mazeslam.geometry import polar_to_cartesian, transform_points
+from mazeslam.grid.filter import GridSlamParams
 from mazeslam.loaded_run import LoadedRun, load_run
 
 
@@ -227,11 +229,32 @@ class EvaluationParams:
             raise ValueError(f"match_radius must be in (0, 100] m, got {self.match_radius}")
 
 
+class MapKind(enum.StrEnum):
+    """What the particles map."""
+
+    LANDMARKS = "landmarks"  #: corners (and wall ends) with an EKF each: FastSLAM, ``[fastslam]``
+    GRID = "grid"  #: an occupancy grid each, matched against: gmapping's filter, ``[grid]``
+
+
+@dataclass(frozen=True)
+class MapParams:
+    """``[map]``: which map the particle filter builds."""
+
+    kind: MapKind = MapKind.LANDMARKS
+
+    def __post_init__(self):
+        object.__setattr__(self, "kind", MapKind(self.kind))
+
+
 @dataclass(frozen=True)
 class SlamConfig:
-    """Everything ``mazeslam slam`` needs; TOML sections ``[fastslam]``, ``[corners]`` (with
-    ``[corners.lines]``), ``[sensor]``, ``[odometry]``, ``[scan_matching]`` and ``[evaluation]``."""
+    """Everything ``mazeslam slam`` needs; TOML sections ``[map]``, ``[fastslam]`` or ``[grid]``,
+    ``[corners]`` (with ``[corners.lines]``), ``[sensor]``, ``[odometry]``, ``[scan_matching]`` and
+    ``[evaluation]``. The grid filter moves by ``[scan_matching]``'s laser odometry when that is
+    enabled."""
 
+    map: MapParams = field(default_factory=MapParams)
+    grid: GridSlamParams = field(default_factory=GridSlamParams)
     fastslam: FastSLAMParams = field(default_factory=FastSLAMParams)
     corners: CornerParams = field(default_factory=CornerParams)
     sensor: SensorOverrides = field(default_factory=SensorOverrides)

@@ -15,7 +15,7 @@ from mazeslam.evaluation.consistency import EXPLANATION, OBSERVATION_BOUND_95, P
 from mazeslam.evaluation.map_export import export_map
 from mazeslam.evaluation.scoring import RPE_DISTANCE, score_run
 from mazeslam.loaded_run import LoadedRun, load_run
-from mazeslam.slam import SlamConfig, SlamResult, load_slam_config, slam_on_run
+from mazeslam.slam import MapKind, SlamConfig, SlamResult, load_slam_config, slam_on_run
 from mazeslam.smooth_command import optimum_columns, optimum_line
 
 #: About how many frames ``--animate`` draws, whatever the log's length.
@@ -32,6 +32,10 @@ def run_slam_command(log_file, config_path, out_dir, filter_changes: dict | None
     config = dataclasses.replace(config, fastslam=with_changes(config.fastslam, **(filter_changes or {})),
                                  sensor=(sensor or SensorOverrides()).over(config.sensor))
     run = load_run(log_file, config.sensor)
+    if config.map.kind == MapKind.GRID:
+        from mazeslam.grid_command import run_grid_command
+
+        return run_grid_command(run, config, Path(out_dir), progress)
     updates = int(run.log.is_scan.sum() + run.log.is_landmark.sum())
     every = max(1, updates // ANIMATION_FRAMES) if animate else 0  # frames for the GIF, at most ~ANIMATION_FRAMES
     began = time.perf_counter()

@@ -86,7 +86,8 @@ def _centre_line_moves(walls: np.ndarray, laps: float, step: float) -> list[tupl
     """Increments (distance m, turn rad) along the ring's centre line, anticlockwise from (1, 1)."""
     length, width = walls[0, 2], walls[1, 3]
     sides = [length - 2.0, width - 2.0, length - 2.0, width - 2.0]
-    moves, travelled, total = [], 0.0, laps * sum(sides)
+    moves: list[tuple[float, float]] = []
+    travelled, total = 0.0, laps * sum(sides)
     for side in range(8):
         for _ in range(int(round(sides[side % 4] / step))):
             if travelled >= total:

@@ -1,0 +1,51 @@
+"""``mazeslam slam`` with ``[map] kind = "grid"`` on a simulated building: the map_server map, the
+trajectory with its covariance, the errors; and the loop it closes where corner FastSLAM does not."""
+
+import json
+
+import numpy as np
+import pytest
+from click.testing import CliRunner
+
+from mazeslam import log, sidecars
+from mazeslam.cli import main
+from mazeslam.grid.map_io import OCCUPIED, read_map
+from mazeslam.grid.synthetic import simulate_building_log
+from mazeslam.loaded_run import load_run
+from mazeslam.slam import SlamConfig, slam_on_run
+
+
+@pytest.fixture(scope="module")
+def building(tmp_path_factory):
+    folder = tmp_path_factory.mktemp("building")
+    simulated = simulate_building_log(folder / "building.log")
+    sidecars.write_truth(sidecars.truth_path(simulated.path), log.read(simulated.path).times, simulated.truth)
+    sidecars.write_map(sidecars.map_path(simulated.path), np.empty((0, 4)), np.empty((0, 2)),
+                       simulated.geometry.to_dict(), start_pose=simulated.start_pose.tolist())
+    config = folder / "grid.toml"
+    config.write_text('[map]\nkind = "grid"\n\n[grid]\nparticles = 8\nmotion = "wheels"\n')
+    return simulated, config
+
+
+def test_the_grid_command_writes_a_map_server_map_and_closes_the_loop(building, tmp_path):
+    simulated, config = building
+    out = tmp_path / "out"
+    result = CliRunner().invoke(main, ["slam", str(simulated.path), "--config", str(config), "--out", str(out),
+                                       "--quiet"])
+    assert result.exit_code == 0, result.output
+    occupancy = read_map(out / "occupancy.yaml")
+    assert (occupancy.states == OCCUPIED).sum() > 500 and occupancy.resolution > 0
+    times, poses, covariances = sidecars.read_trajectory(out / "trajectory.csv")
+    assert len(poses) == len(simulated.truth) and np.all(np.linalg.eigvalsh(covariances[-10:]) >= -1e-12)
+    document = json.loads((out / "map.json").read_text())
+    errors = {row["estimator"]: row for row in document["ate"]}
+    assert errors["grid filter (mean)"]["aligned_rmse"] < 0.1 < errors["dead reckoning"]["aligned_rmse"]
+    assert document["nees"]["count"] > 0
+
+
+def test_corner_fastslam_does_not_close_that_loop(building):
+    simulated, _ = building
+    run = load_run(simulated.path)
+    result = slam_on_run(run, SlamConfig(), progress=False)
+    final_error = np.hypot(*(result.mean_poses[-1, :2] - simulated.truth[-1, :2]))
+    assert final_error > 0.5  # corridors without corners: the corners give the filter nothing to hold on to
