@@ -218,7 +218,9 @@ def corners(log_file, scan_number, plot_path, animation_path, json_path, config_
 @click.option("--association", type=click.Choice(["unknown", "known"]),
               help="unknown: maximum likelihood with a gate; known: the landmark records' identities.")
 @click.option("--version", "version", type=click.Choice(["1", "2"]), help="FastSLAM 1.0 or 2.0.")
-@click.option("--animate", is_flag=True, help="Also write slam.gif (particles and map over time).")
+@click.option("--animate", is_flag=True,
+              help="Also write the run as an animation (particles, map, current scan and corners over time): "
+                   "slam.mp4 when ffmpeg is available (pip install 'mazeslam[video]'), slam.gif otherwise.")
 @beam_geometry_options
 @click.option("--quiet", is_flag=True, help="No progress bar.")
 def slam(log_file, particles, config_path, out_dir, seed, association, version, animate, first_beam_angle,

@@ -14,6 +14,8 @@ from mazeslam.evaluation import slam_report
 from mazeslam.evaluation.consistency import EXPLANATION, OBSERVATION_BOUND_95, POSE_BOUND_95, nis_summary
 from mazeslam.evaluation.map_export import export_map
 from mazeslam.evaluation.scoring import RPE_DISTANCE, score_run
+from mazeslam.evaluation.slam_view import scan_source
+from mazeslam.filters.corners import CornerExtractor
 from mazeslam.loaded_run import LoadedRun, load_run
 from mazeslam.slam import MapKind, SlamConfig, SlamResult, load_slam_config, slam_on_run
 from mazeslam.smooth_command import optimum_columns, optimum_line
@@ -76,7 +78,12 @@ def run_slam_command(log_file, config_path, out_dir, filter_changes: dict | None
     paths.update(export_map(out_dir, run.log, result.mean_poses, run.geometry, result.landmarks,
                             result.landmark_covariances, config.corners.min_range, config.corners.max_range))
     if animate:
-        paths["animation"] = slam_report.animate_slam(Path(out_dir) / "slam.gif", result, points, run.truth, run.walls)
+        extractor = CornerExtractor(run.geometry, run.log.width, config.corners)
+        paths["animation"] = slam_report.animate_slam(
+            Path(out_dir) / "slam.gif", result, points, run.truth, run.walls,
+            scan_at=scan_source(run.log, result.mean_poses, run.geometry, extractor) if run.log.n_beams else None,
+            title=f"{run.path.name}: FastSLAM, {config.fastslam.NPARTICLES} particles", progress=progress,
+            truth_label=truth_label)
     lines.append("wrote " + ", ".join(str(p) for p in paths.values()))
     return lines
 

@@ -41,7 +41,7 @@ def draw_scan(ax, features: ScanFeatures, mount=(0.0, 0.0), true_corners: np.nda
         shown.add(label)
     if true_corners is not None and len(true_corners):
         ax.plot(true_corners[:, 0], true_corners[:, 1], "k+", markersize=9, label="true corners")
-    ax.plot(0, 0, "^", color="tab:blue", markersize=9, label="robot")
+    ax.plot(0, 0, ">", color="tab:blue", markersize=9, label="robot (faces +x)")
     ax.set_aspect("equal")
     ax.set_xlabel("x forward [m]")
     ax.set_ylabel("y left [m]")

@@ -10,13 +10,13 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
-from matplotlib.animation import FuncAnimation, PillowWriter  # noqa: E402
 from matplotlib.patches import Ellipse  # noqa: E402
 
 from mazeslam import log, sidecars  # noqa: E402
 from mazeslam.beams import BeamGeometry  # noqa: E402
 from mazeslam.config import jsonable  # noqa: E402
 from mazeslam.evaluation.plots import save_figure  # noqa: E402
+from mazeslam.evaluation.slam_view import ScanSource, SlamView, save_animation, view_extent  # noqa: E402
 from mazeslam.geometry import transform_points  # noqa: E402
 from mazeslam.slam import SlamResult  # noqa: E402
 
@@ -87,35 +87,16 @@ def _ellipse(mean, covariance, sigmas: float = 2.0) -> Ellipse:
 
 
 def animate_slam(path, result: SlamResult, points: np.ndarray, truth: np.ndarray | None = None,
-                 walls: np.ndarray | None = None, frames_per_second: int = 5) -> Path:
-    """A GIF of the run: particles (red), map so far (purple), path so far, one frame per snapshot."""
-    fig, ax = plt.subplots(figsize=(6, 6))
-    extent = np.vstack([points, result.mean_poses[:, :2]] + ([truth[:, :2]] if truth is not None else []))
-    margin = 0.05 * (extent.max(axis=0) - extent.min(axis=0)).max()
-    low, high = extent.min(axis=0) - margin, extent.max(axis=0) + margin
-
-    def draw(frame):
-        index, particles, landmarks = result.snapshots[frame]
-        ax.clear()
-        if walls is not None:
-            for x1, y1, x2, y2 in walls:
-                ax.plot([x1, x2], [y1, y2], color="0.75", linewidth=1.0)
-        if truth is not None:
-            ax.plot(truth[: index + 1, 0], truth[: index + 1, 1], color="tab:green", linewidth=1.0)
-        ax.plot(result.mean_poses[: index + 1, 0], result.mean_poses[: index + 1, 1], color="tab:blue", linewidth=1.0)
-        ax.plot(particles[:, 0], particles[:, 1], ".", color="red", markersize=2)
-        if len(landmarks):
-            ax.plot(landmarks[:, 0], landmarks[:, 1], "+", color="tab:purple", markersize=7)
-        ax.set_xlim(low[0], high[0])
-        ax.set_ylim(low[1], high[1])
-        ax.set_aspect("equal")
-        ax.set_title(f"record {index}, t = {result.times[index]:.1f} s", fontsize=9)
-
-    animation = FuncAnimation(fig, draw, frames=len(result.snapshots))
-    path = Path(path)
-    animation.save(path, writer=PillowWriter(fps=frames_per_second))
-    plt.close(fig)
-    return path
+                 walls: np.ndarray | None = None, frames_per_second: int = 10, scan_at: ScanSource | None = None,
+                 title: str = "", progress: bool = False, video: bool | None = None,
+                 truth_label: str = "true path") -> Path:
+    """The run as an animation, one frame per snapshot (``SlamView``: particles, map so far, path so
+    far, the current scan and its corners from ``scan_at``): MP4 when ffmpeg is available (``path``
+    with suffix .mp4), GIF otherwise; returns the path written. A progress bar with ``progress``."""
+    extent = view_extent(points, result.mean_poses, truth)
+    view = SlamView(result.times, result.mean_poses, extent, title, truth, walls, scan_at, truth_label=truth_label)
+    frames = [(index, particles, landmarks) for index, particles, landmarks in result.snapshots]
+    return save_animation(view, frames, path, frames_per_second, progress, video)
 
 
 def write_outputs(out_dir, result: SlamResult, extra: dict) -> dict[str, Path]:
