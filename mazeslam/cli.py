@@ -221,9 +221,12 @@ def corners(log_file, scan_number, plot_path, animation_path, json_path, config_
 @click.option("--animate", is_flag=True,
               help="Also write the run as an animation (particles, map, current scan and corners over time): "
                    "slam.mp4 when ffmpeg is available (pip install 'mazeslam[video]'), slam.gif otherwise.")
+@click.option("--live", is_flag=True,
+              help="Show the filter as it runs in a window (particles, map, current scan and corners); without a "
+                   "display, says so (use --animate).")
 @beam_geometry_options
 @click.option("--quiet", is_flag=True, help="No progress bar.")
-def slam(log_file, particles, config_path, out_dir, seed, association, version, animate, first_beam_angle,
+def slam(log_file, particles, config_path, out_dir, seed, association, version, animate, live, first_beam_angle,
          beam_direction, mount_x, quiet):
     """Run FastSLAM on a course log: trajectory, map, the exercise's figure, and errors when truth exists."""
     from mazeslam.slam_command import run_slam_command
@@ -235,7 +238,8 @@ def slam(log_file, particles, config_path, out_dir, seed, association, version, 
     clear_outputs(out_dir, SLAM_FILES)
     filter_changes = {"NPARTICLES": particles, "seed": seed, "association": association,
                       "version": int(version) if version else None}
-    lines = run_slam_command(log_file, config_path, out_dir, filter_changes, overrides, animate, not quiet)
+    lines = run_slam_command(log_file, config_path, out_dir, filter_changes, overrides, animate, not quiet, live=live,
+                             echo=lambda message: click.echo(message, err=True))
     click.echo("\n".join(lines))
     click.echo(f"results in {out_dir}")
 

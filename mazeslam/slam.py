@@ -77,7 +77,8 @@ class SlamResult:
 def run_fastslam(course_log: log.CourseLog, params: FastSLAMParams | None = None,
                  corner_params: CornerParams | None = None, geometry: BeamGeometry = EXERCISE_CONVENTION,
                  start_pose=(0.0, 0.0, 0.0), progress: bool = True, snapshot_every: int = 0,
-                 jump_tolerance: float = math.inf, identify=None, laser: LaserOdometry | None = None) -> SlamResult:
+                 jump_tolerance: float = math.inf, identify=None, laser: LaserOdometry | None = None,
+                 on_update=None) -> SlamResult:
     """FastSLAM over every record of ``course_log``; odometry records travelling more than
     ``jump_tolerance`` metres are left out (listed in ``SlamResult.dropped_odometry``).
 
@@ -86,6 +87,9 @@ def run_fastslam(course_log: log.CourseLog, params: FastSLAMParams | None = None
 
     ``identify(record_index, observations (K, 2)) -> ids (K,)`` names the landmark each scan
     observation is (for ``association="known"`` on scan logs; landmark records carry their own).
+
+    ``on_update(record_index, filter)``, when given, is called after every observation update (for
+    a live view: ``mazeslam.live``); it must not change the filter.
     """
     params = params or FastSLAMParams()
     slam = FastSLAM(params, start_pose)
@@ -128,6 +132,8 @@ def run_fastslam(course_log: log.CourseLog, params: FastSLAMParams | None = None
                                        facings))
             if snapshot_every and (len(reports) - 1) % snapshot_every == 0:
                 snapshots.append((record.index, slam.poses.copy(), slam.landmarks()[0]))
+            if on_update is not None:
+                on_update(record.index, slam)
         mean, best, spread = slam.mean_pose(), slam.poses[slam.best_particle()], slam.pose_covariance()
         for finished in done:
             mean_poses[finished.index], best_poses[finished.index] = mean, best
@@ -159,7 +165,7 @@ def _same_time_landmarks(records: list, position: int) -> list[log.LandmarkRecor
 
 
 def slam_on_run(run: LoadedRun, config: SlamConfig | None = None, progress: bool = True, snapshot_every: int = 0,
-                laser: LaserOdometry | None = None) -> SlamResult:
+                laser: LaserOdometry | None = None, on_update=None) -> SlamResult:
     """``run_fastslam`` on a loaded log, from its start pose with its beam geometry.
 
     With ``[scan_matching] enabled`` the filter moves by the log's laser odometry: ``laser`` if
@@ -178,7 +184,7 @@ def slam_on_run(run: LoadedRun, config: SlamConfig | None = None, progress: bool
     if config.fastslam.association == Association.KNOWN and course_log.is_scan.any():
         identify = truth_identities(run, config.evaluation.match_radius)
     return run_fastslam(course_log, config.fastslam, config.corners, run.geometry, run.start_pose, progress,
-                        snapshot_every, config.odometry.jump_tolerance, identify, laser)
+                        snapshot_every, config.odometry.jump_tolerance, identify, laser, on_update)
 
 
 def slam_on_file(path: str | Path, config: SlamConfig | None = None, progress: bool = True,

@@ -25,11 +25,13 @@ ANIMATION_FRAMES = 150
 
 
 def run_slam_command(log_file, config_path, out_dir, filter_changes: dict | None = None,
-                     sensor: SensorOverrides | None = None, animate=False, progress=True) -> list[str]:
+                     sensor: SensorOverrides | None = None, animate=False, progress=True, live=False,
+                     echo=None) -> list[str]:
     """Run, write ``out_dir``/{trajectory.csv, best_trajectory.csv, map.json, slam.png, occupancy.pgm/.yaml/.png,
     landmarks.csv[, slam.gif]};
     return the lines to print. ``filter_changes`` replace ``[fastslam]`` settings and ``sensor``
-    the ``[sensor]`` ones (None values: keep the config's)."""
+    the ``[sensor]`` ones (None values: keep the config's). ``live``: draw the filter as it runs
+    (``mazeslam.live``; its note when there is no window goes to ``echo`` at once, and to the lines)."""
     config = load_slam_config(config_path)
     config = dataclasses.replace(config, fastslam=with_changes(config.fastslam, **(filter_changes or {})),
                                  sensor=(sensor or SensorOverrides()).over(config.sensor))
@@ -40,10 +42,22 @@ def run_slam_command(log_file, config_path, out_dir, filter_changes: dict | None
         return run_grid_command(run, config, Path(out_dir), progress)
     updates = int(run.log.is_scan.sum() + run.log.is_landmark.sum())
     every = max(1, updates // ANIMATION_FRAMES) if animate else 0  # frames for the GIF, at most ~ANIMATION_FRAMES
+    view = None
+    if live:
+        from mazeslam.live import LiveView
+
+        view = LiveView(run, config.corners, f"{run.path.name}: FastSLAM, {config.fastslam.NPARTICLES} particles")
+        if view.message and echo is not None:
+            echo(view.message)
     began = time.perf_counter()
-    result = slam_on_run(run, config, progress, snapshot_every=every)
+    result = slam_on_run(run, config, progress, snapshot_every=every, on_update=view)
+    if view is not None:
+        view.close(len(run.log) - 1, result.filter)
     matching_seconds = time.perf_counter() - began - result.step_seconds.sum()
     lines = _run_lines(run, config, result, matching_seconds)
+    if view is not None:
+        lines.append(f"Live view: {view.frames} frames drawn in {view.drawing_seconds:.1f} s"
+                     + ("" if view.window else " (off-screen: no display)"))
     score = score_run(run, result, config.evaluation.match_radius)
     nis = nis_summary(result.nis)
     line_numbers = run.log.line_numbers

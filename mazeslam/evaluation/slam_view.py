@@ -57,10 +57,11 @@ class SlamView:
         self.figure.subplots_adjust(left=0.09, right=0.75, bottom=0.09, top=0.9)
 
     def show(self, index: int, particles: np.ndarray, landmarks: np.ndarray,
-             covariances: np.ndarray | None = None) -> None:
+             covariances: np.ndarray | None = None, path: np.ndarray | None = None) -> None:
         """Set the figure to record ``index``: particle poses (P, 3), landmarks (L, 2) and their
-        covariances (L, 2, 2) (no ellipses when None)."""
-        path = self.mean_poses[: index + 1]
+        covariances (L, 2, 2) (no ellipses when None); ``path`` (N, >=2) the estimated path so far
+        (default: ``mean_poses`` up to ``index``)."""
+        path = self.mean_poses[: index + 1] if path is None else np.asarray(path).reshape(-1, 3)
         self.path_line.set_data(path[:, 0], path[:, 1])
         if self.truth_line is not None and self.truth is not None:
             self.truth_line.set_data(self.truth[: index + 1, 0], self.truth[: index + 1, 1])

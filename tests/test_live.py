@@ -1,0 +1,58 @@
+"""``slam --live`` with a non-interactive backend: the view draws off-screen at a bounded rate and
+says there is no window."""
+
+import time
+
+import pytest
+from click.testing import CliRunner
+
+from mazeslam.cli import main
+from mazeslam.loaded_run import load_run
+from mazeslam.slam import SlamConfig, slam_on_run
+
+
+@pytest.fixture(scope="module")
+def short_log(tmp_path_factory):
+    from mazeslam import simulate
+
+    out = tmp_path_factory.mktemp("live") / "short.log"
+    simulate(out, seed=4, duration=15.0, progress=False)
+    return out
+
+
+def test_live_view_counts_frames_off_screen(short_log, monkeypatch):
+    monkeypatch.setenv("MPLBACKEND", "Agg")
+    from mazeslam.live import LiveView
+
+    run = load_run(short_log)
+    view = LiveView(run, SlamConfig().corners, "short.log", max_fps=1000.0)
+    assert not view.window and "--animate" in view.message
+    began = time.perf_counter()
+    result = slam_on_run(run, progress=False, on_update=view)
+    seconds = time.perf_counter() - began
+    assert 3 <= view.frames <= len(result.reports)
+    assert view.drawing_seconds <= 0.5 * seconds + 0.2  # drawing at most about half the time
+    assert len(view.view.particles.get_xdata()) == result.filter.poses.shape[0]
+    assert view.view.ax.get_xlabel() == "x [m]"
+    view.close()
+
+
+def test_frame_rate_is_bounded(short_log, monkeypatch):
+    monkeypatch.setenv("MPLBACKEND", "Agg")
+    from mazeslam.live import LiveView
+
+    run = load_run(short_log)
+    view = LiveView(run, SlamConfig().corners, max_fps=2.0)
+    began = time.perf_counter()
+    slam_on_run(run, progress=False, on_update=view)
+    assert view.frames <= 2.0 * (time.perf_counter() - began) + 1
+    view.close()
+
+
+def test_slam_live_without_a_display_says_so(short_log, tmp_path, monkeypatch):
+    monkeypatch.setenv("MPLBACKEND", "Agg")
+    result = CliRunner().invoke(main, ["slam", str(short_log), "--live", "--quiet", "--out", str(tmp_path / "out")])
+    assert result.exit_code == 0, result.output
+    assert "no display" in result.output and "--animate" in result.output
+    assert "Live view:" in result.output
+    assert (tmp_path / "out" / "slam.png").stat().st_size > 10_000  # the figures still go to files
