@@ -30,8 +30,9 @@ def test_live_view_counts_frames_off_screen(short_log, monkeypatch):
     began = time.perf_counter()
     result = slam_on_run(run, progress=False, on_update=view)
     seconds = time.perf_counter() - began
-    assert 3 <= view.frames <= len(result.reports)
-    assert view.drawing_seconds <= 0.5 * seconds + 0.2  # drawing at most about half the time
+    assert 1 <= view.frames <= len(result.reports)
+    # Drawing takes at most about half the time (a frame waits as long as the last one took).
+    assert view.drawing_seconds <= 0.5 * seconds + view.drawing_seconds / view.frames + 0.1
     assert len(view.view.particles.get_xdata()) == result.filter.poses.shape[0]
     assert view.view.ax.get_xlabel() == "x [m]"
     view.close()
