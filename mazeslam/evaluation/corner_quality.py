@@ -22,7 +22,7 @@ import pandas as pd
 
 from mazeslam import log, sidecars
 from mazeslam.envs.laser import RayCaster
-from mazeslam.filters.corners import CornerExtractor, CornerParams
+from mazeslam.filters.corners import CornerExtractor, CornerMode, CornerParams
 from mazeslam.geometry import compose, transform_points
 
 #: Distance (m) below which a point counts as lying on a wall face.
@@ -104,7 +104,7 @@ def evaluate_log(log_path: str | Path, params: CornerParams | None = None, toler
     _, truth = sidecars.read_truth(sidecars.truth_path(log_path))
     world = sidecars.read_map(sidecars.map_path(log_path))
     geometry = sidecars.beam_geometry(world["sensor"])
-    params = replace(params or CornerParams(), mode="corners")
+    params = replace(params or CornerParams(), mode=CornerMode.CORNERS)
     extractor = CornerExtractor(geometry, course_log.width, params)
     caster = RayCaster(world["walls"], extractor.bearings, world["sensor"]["max_range"])
     corners = world["corners"]

@@ -26,6 +26,7 @@ range, bearing, each with a covariance propagated from the line fits.
 
 from __future__ import annotations
 
+import enum
 import math
 from dataclasses import dataclass, field
 
@@ -36,6 +37,13 @@ from mazeslam.config import require
 from mazeslam.filters.lines import LineParams, LineSegment, SplitAndMerge
 
 FIXED_KINDS = ("corner", "wall_end")
+
+
+class CornerMode(enum.StrEnum):
+    """Which segment ends become observations."""
+
+    CORNERS = "corners"  #: the fixed kinds only (corners and wall ends)
+    ENDPOINTS = "endpoints"  #: every segment end, as the exercise's extract_beacon
 KINDS = (*FIXED_KINDS, "occluded", "gap", "edge", "junction")
 
 
@@ -79,7 +87,7 @@ class CornerParams:
     max_skipped_points: int = 3
     max_end_spacing: float = 0.02
     end_face_std: float = 0.005
-    mode: str = "corners"
+    mode: CornerMode = CornerMode.CORNERS
     covariance_scale: dict[str, float] = field(default_factory=lambda: {"corner": 0.85, "wall_end": 5.5})
 
     def __post_init__(self):
@@ -93,7 +101,8 @@ class CornerParams:
         require(self.max_skipped_points >= 0, f"max_skipped_points must be >= 0, got {self.max_skipped_points}")
         require(self.max_end_spacing > 0, f"max_end_spacing must be positive, got {self.max_end_spacing}")
         require(self.end_face_std >= 0, f"end_face_std must be >= 0, got {self.end_face_std}")
-        require(self.mode in ("corners", "endpoints"), f"mode must be 'corners' or 'endpoints', got {self.mode!r}")
+        require(self.mode in tuple(CornerMode), f"mode must be 'corners' or 'endpoints', got {self.mode!r}")
+        object.__setattr__(self, "mode", CornerMode(self.mode))
         require(isinstance(self.covariance_scale, dict) and set(self.covariance_scale) <= set(KINDS),
                 f"covariance_scale names kinds among {', '.join(KINDS)}, got {self.covariance_scale!r}")
         require(all(isinstance(value, (int, float)) and 0 < value < math.inf
@@ -239,7 +248,7 @@ class CornerExtractor:
                 corner = self._corner(segments[i], segments[j])
                 if corner is not None:
                     corner_after[i] = corner_before[j] = True
-                    if self.params.mode == "corners":
+                    if self.params.mode == CornerMode.CORNERS:
                         point, covariance = corner
                         facing = _toward_sensor(segments[i].normal + segments[j].normal)
                         observations.append(self._observation(point, np.array(covariance), "corner",
@@ -251,7 +260,7 @@ class CornerExtractor:
                 kind = "corner" if has_corner else self._end_kind(ranges, valid, breaks, beams[position], at_start,
                                                                   segment)
                 facing = _toward_sensor(segment.normal)
-                if self.params.mode == "endpoints":
+                if self.params.mode == CornerMode.ENDPOINTS:
                     point = segment.start if at_start else segment.end
                     observations.append(self._observation(point, self._end_covariance(segment, point), kind,
                                                           beams[position], facing))
