@@ -38,17 +38,22 @@ def speed(folder: Path) -> dict:
         for ranges in scans:
             extractor.extract(ranges)
         best = min(best, (time.perf_counter() - start) / len(scans))
-    return {"benchmark": "corner extraction, 180 beams", "scans_per_second": 1 / best,
-            "target": TARGET_SCANS_PER_SECOND, "ratio_to_target": 1 / best / TARGET_SCANS_PER_SECOND,
-            "met": 1 / best >= TARGET_SCANS_PER_SECOND}
+    return {
+        "benchmark": "corner extraction, 180 beams",
+        "scans_per_second": 1 / best,
+        "target": TARGET_SCANS_PER_SECOND,
+        "ratio_to_target": 1 / best / TARGET_SCANS_PER_SECOND,
+        "met": 1 / best >= TARGET_SCANS_PER_SECOND,
+    }
 
 
 def settings_for_noise(noise: float) -> CornerParams:
     """The default settings with the noise model and thresholds scaled to a range noise (m)."""
     base = CornerParams()
     threshold = max(base.lines.split_threshold, 4 * noise)
-    lines = dataclasses.replace(base.lines, range_noise_std=max(noise, 1e-4), split_threshold=threshold,
-                                merge_threshold=threshold)
+    lines = dataclasses.replace(
+        base.lines, range_noise_std=max(noise, 1e-4), split_threshold=threshold, merge_threshold=threshold
+    )
     return dataclasses.replace(base, lines=lines)
 
 
@@ -58,16 +63,21 @@ def quality(folder: Path) -> pd.DataFrame:
     rows = []
     for noise in NOISE_LEVELS:
         base = SimulationConfig()
-        config = dataclasses.replace(base, maze=MazeParams(rows=6, cols=6),
-                                     laser=dataclasses.replace(base.laser, range_noise_std=noise))
+        config = dataclasses.replace(
+            base, maze=MazeParams(rows=6, cols=6), laser=dataclasses.replace(base.laser, range_noise_std=noise)
+        )
         for seed in SEEDS:
             result = simulate(folder / f"q{noise}-{seed}.log", config=config, seed=seed, progress=False)
             for settings, params in (("default", CornerParams()), ("scaled to noise", settings_for_noise(noise))):
                 rows.append({"range_noise_m": noise, "settings": settings, **evaluate_log(result.log_path, params)})
     table = pd.DataFrame(rows)
     return table.groupby(["range_noise_m", "settings"]).agg(
-        precision=("precision", "mean"), recall=("recall", "mean"), median_error_m=("median_error_m", "mean"),
-        detections=("detections", "sum"), observable=("observable", "sum"))
+        precision=("precision", "mean"),
+        recall=("recall", "mean"),
+        median_error_m=("median_error_m", "mean"),
+        detections=("detections", "sum"),
+        observable=("observable", "sum"),
+    )
 
 
 if __name__ == "__main__":

@@ -47,7 +47,8 @@ def irsim_rate(maze, steps: int = 300) -> float | None:
     obstacles = "\n".join(
         f"  - shape: {{name: 'polygon', vertices: [[{a}, {b}], [{c}, {b}], [{c}, {d}], [{a}, {d}]]}}\n"
         f"    state: [0, 0, 0]"
-        for a, b, c, d in wall_geometry(maze).boxes)
+        for a, b, c, d in wall_geometry(maze).boxes
+    )
     start = maze.cell_center(0, 0)
     world = f"""world:
   height: {maze.rows * maze.cell_size + 0.1}
@@ -86,8 +87,11 @@ def run() -> dict:
     maze = generate_maze(ROWS, COLS, 0)
     ours = mazeslam_rate(maze)
     theirs = irsim_rate(maze)
-    row = {"benchmark": f"env steps/s, 180 beams, {ROWS}x{COLS} maze", "mazeslam_steps_per_s": ours,
-           "target": TARGET_RATE}
+    row = {
+        "benchmark": f"env steps/s, 180 beams, {ROWS}x{COLS} maze",
+        "mazeslam_steps_per_s": ours,
+        "target": TARGET_RATE,
+    }
     if theirs is not None:
         row.update({"irsim_steps_per_s": theirs, "ratio": ours / theirs})
     row["met"] = ours >= TARGET_RATE and (theirs is None or ours / theirs >= TARGET_RATIO)

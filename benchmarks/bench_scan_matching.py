@@ -44,11 +44,22 @@ def run() -> list[dict]:
         orebro, orebro_seconds = timed_laser_odometry("orebro", Path(folder))
     factor = aces.duration / aces_seconds
     blind_rate = orebro.is_scan.sum() / orebro_seconds
-    return [{"benchmark": "laser odometry, aces (wheel prior)", "value": factor, "unit": "x real time",
-             "target": TARGET_REAL_TIME, "met": factor >= TARGET_REAL_TIME},
-            {"benchmark": "laser odometry, orebro (no odometry: correlative search)", "value": blind_rate,
-             "unit": "scans/s", "target": TARGET_BLIND_SCANS_PER_SECOND,
-             "met": blind_rate >= TARGET_BLIND_SCANS_PER_SECOND}]
+    return [
+        {
+            "benchmark": "laser odometry, aces (wheel prior)",
+            "value": factor,
+            "unit": "x real time",
+            "target": TARGET_REAL_TIME,
+            "met": factor >= TARGET_REAL_TIME,
+        },
+        {
+            "benchmark": "laser odometry, orebro (no odometry: correlative search)",
+            "value": blind_rate,
+            "unit": "scans/s",
+            "target": TARGET_BLIND_SCANS_PER_SECOND,
+            "met": blind_rate >= TARGET_BLIND_SCANS_PER_SECOND,
+        },
+    ]
 
 
 if __name__ == "__main__":

@@ -28,8 +28,9 @@ TARGET_RATE_64, TARGET_RATIO_64, TARGET_IRSIM_RATIO_1 = 20_000.0, 10.0, 20.0
 def aggregate_rate(mode: str, num_envs: int, steps: int) -> float:
     """Env steps per second of ``make_vec(..., vectorization_mode=mode)`` under random actions,
     after a few warm-up steps (the first reset draws every maze)."""
-    envs = gym.make_vec("mazeslam/Maze-v0", num_envs=num_envs, vectorization_mode=mode, rows=ROWS, cols=COLS,
-                        max_steps=100_000)
+    envs = gym.make_vec(
+        "mazeslam/Maze-v0", num_envs=num_envs, vectorization_mode=mode, rows=ROWS, cols=COLS, max_steps=100_000
+    )
     envs.reset(seed=0)
     envs.action_space.seed(0)
     actions = [envs.action_space.sample() for _ in range(steps + 3)]
@@ -45,21 +46,32 @@ def aggregate_rate(mode: str, num_envs: int, steps: int) -> float:
 
 def run() -> list[dict]:
     irsim = irsim_rate(generate_maze(ROWS, COLS, 0))
-    print("ir-sim 2.12 single env:", f"{irsim:.0f} steps/s" if irsim else "skipped: ir-sim is not installed "
-          "(pip install ir-sim==2.12.0)", flush=True)
+    print(
+        "ir-sim 2.12 single env:",
+        f"{irsim:.0f} steps/s" if irsim else "skipped: ir-sim is not installed (pip install ir-sim==2.12.0)",
+        flush=True,
+    )
     rows = []
     for size in SIZES:
         ours = aggregate_rate("vector_entry_point", size, VECTOR_STEPS[size])
         sync = aggregate_rate("sync", size, SYNC_STEPS[size])
-        row = {"benchmark": f"vector env, {size} envs, {ROWS}x{COLS}, 180 beams", "steps_per_s": ours,
-               "sync_steps_per_s": sync, "ratio_to_sync": ours / sync,
-               "ratio_to_irsim": ours / irsim if irsim else float("nan")}
+        row = {
+            "benchmark": f"vector env, {size} envs, {ROWS}x{COLS}, 180 beams",
+            "steps_per_s": ours,
+            "sync_steps_per_s": sync,
+            "ratio_to_sync": ours / sync,
+            "ratio_to_irsim": ours / irsim if irsim else float("nan"),
+        }
         if size == 64:
             row["met"] = ours >= TARGET_RATE_64 and ours / sync >= TARGET_RATIO_64
         if size == 1 and irsim:
             row["met"] = ours / irsim >= TARGET_IRSIM_RATIO_1
-        print(", ".join(f"{key} {value:.4g}" if isinstance(value, float) else f"{key} {value}"
-                        for key, value in row.items()), flush=True)
+        print(
+            ", ".join(
+                f"{key} {value:.4g}" if isinstance(value, float) else f"{key} {value}" for key, value in row.items()
+            ),
+            flush=True,
+        )
         rows.append(row)
     return rows
 
@@ -69,5 +81,7 @@ if __name__ == "__main__":
 
     table = pd.DataFrame(run()).set_index("benchmark")
     print(table.to_markdown(floatfmt=".4g"))
-    print(f"targets: 64 envs >= {TARGET_RATE_64:.0f} steps/s and >= {TARGET_RATIO_64:.0f}x sync; "
-          f"1 env >= {TARGET_IRSIM_RATIO_1:.0f}x ir-sim")
+    print(
+        f"targets: 64 envs >= {TARGET_RATE_64:.0f} steps/s and >= {TARGET_RATIO_64:.0f}x sync; "
+        f"1 env >= {TARGET_IRSIM_RATIO_1:.0f}x ir-sim"
+    )

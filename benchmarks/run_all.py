@@ -22,8 +22,11 @@ import bench_vector_env  # noqa: E402
 
 def main() -> int:
     with tempfile.TemporaryDirectory() as folder:
-        tables = [pd.DataFrame([bench_laser.run()]), pd.DataFrame(bench_simulation.run()),
-                  pd.DataFrame([bench_corners.speed(Path(folder))])]
+        tables = [
+            pd.DataFrame([bench_laser.run()]),
+            pd.DataFrame(bench_simulation.run()),
+            pd.DataFrame([bench_corners.speed(Path(folder))]),
+        ]
         tables += [pd.DataFrame([row]) for row in bench_fastslam.run()]
         tables += [pd.DataFrame([row]) for row in bench_sweep.run()]
         tables += [pd.DataFrame([row]) for row in bench_scan_matching.run()]

@@ -101,12 +101,16 @@ def main():
     parser.add_argument("--cols", type=int, default=4)
     parser.add_argument("--record", help="write the episode as a course log here (sidecars beside it)")
     parser.add_argument("--render", action="store_true", help="show the agent in a window as it drives")
-    parser.add_argument("--video", metavar="FOLDER", help="record the episode as an MP4 into FOLDER (needs moviepy: "
-                        "pip install 'mazeslam[video]')")
+    parser.add_argument(
+        "--video",
+        metavar="FOLDER",
+        help="record the episode as an MP4 into FOLDER (needs moviepy: pip install 'mazeslam[video]')",
+    )
     args = parser.parse_args()
     render_mode = "human" if args.render else "rgb_array" if args.video else None
-    env = gym.make("mazeslam/Maze-v0", rows=args.rows, cols=args.cols, max_episode_steps=args.steps,
-                   render_mode=render_mode)
+    env = gym.make(
+        "mazeslam/Maze-v0", rows=args.rows, cols=args.cols, max_episode_steps=args.steps, render_mode=render_mode
+    )
     if args.video:
         env = gym.wrappers.RecordVideo(env, args.video, name_prefix="frontier_agent", disable_logger=True)
     if args.record:
@@ -121,9 +125,10 @@ def main():
         if terminated or truncated:
             break
     env.close()
-    print(f"frontier agent: {steps_taken} steps ({info['time']:.0f} s), reward {total:.1f}, cells visited "
-          f"{info['visited']:.0%}, walls seen {info['coverage']:.0%}"
-          + (f"; log: {args.record}" if args.record else ""))
+    print(
+        f"frontier agent: {steps_taken} steps ({info['time']:.0f} s), reward {total:.1f}, cells visited "
+        f"{info['visited']:.0%}, walls seen {info['coverage']:.0%}" + (f"; log: {args.record}" if args.record else "")
+    )
 
 
 if __name__ == "__main__":

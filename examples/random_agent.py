@@ -35,8 +35,10 @@ def main():
         if terminated or truncated:
             break
     env.close()
-    print(f"random agent: {steps_taken} steps, reward {total:.1f}, cells visited {info['visited']:.0%}, "
-          f"walls seen {info['coverage']:.0%}, steps touching a wall {collisions}")
+    print(
+        f"random agent: {steps_taken} steps, reward {total:.1f}, cells visited {info['visited']:.0%}, "
+        f"walls seen {info['coverage']:.0%}, steps touching a wall {collisions}"
+    )
 
 
 if __name__ == "__main__":

@@ -41,8 +41,9 @@ def main():
         print("stable-baselines3 is not installed: pip install stable-baselines3, then run this again.")
         return 0
     env = gym.make("mazeslam/Maze-v0", rows=3, cols=3, max_episode_steps=300)
-    model = PPO("MultiInputPolicy", env, n_steps=512, batch_size=64, policy_kwargs={"net_arch": [32, 32]},
-                seed=0, verbose=0)
+    model = PPO(
+        "MultiInputPolicy", env, n_steps=512, batch_size=64, policy_kwargs={"net_arch": [32, 32]}, seed=0, verbose=0
+    )
     model.learn(total_timesteps=args.steps)
     trained = mean_return(env, lambda observation: model.predict(observation, deterministic=True)[0])
     random = mean_return(env, lambda observation: env.action_space.sample())

@@ -62,13 +62,15 @@ def train(envs, generations: int, sigma: float = 0.5, learning_rate: float = 0.2
         noise = rng.standard_normal((pairs, SECTORS + 1, 2))
         population = weights + sigma * np.concatenate([noise, -noise])  # env k and k + pairs: a pair
         maze_seeds = 1000 * (generation + 1) + np.tile(np.arange(pairs), 2)
+
         def policy(observation, population=population):
             return act(population, observation, max_range)
 
         returns, _ = episodes(envs, policy, maze_seeds)
         advantage = returns[:pairs] - returns[pairs:]
-        weights = weights + learning_rate / (2 * pairs * sigma) * np.einsum("p,pfa->fa",
-                                                                           advantage / (advantage.std() + 1e-8), noise)
+        weights = weights + learning_rate / (2 * pairs * sigma) * np.einsum(
+            "p,pfa->fa", advantage / (advantage.std() + 1e-8), noise
+        )
         history.append(returns.mean())
         print(f"generation {generation:3d}: mean return {returns.mean():7.2f}", flush=True)
     return weights, np.array(history)
@@ -82,19 +84,31 @@ def main():
     parser.add_argument("--size", type=int, default=6, help="maze rows and columns")
     parser.add_argument("--figure", default="vector_env_coverage.png")
     args = parser.parse_args()
-    envs = gym.make_vec("mazeslam/Maze-v0", num_envs=args.num_envs, vectorization_mode="vector_entry_point",
-                        rows=args.size, cols=args.size, max_steps=args.steps, collision_penalty=0.05)
+    envs = gym.make_vec(
+        "mazeslam/Maze-v0",
+        num_envs=args.num_envs,
+        vectorization_mode="vector_entry_point",
+        rows=args.size,
+        cols=args.size,
+        max_steps=args.steps,
+        collision_penalty=0.05,
+    )
     began = time.perf_counter()
     weights, history = train(envs, args.generations)
     print(f"trained in {time.perf_counter() - began:.0f} s")
     max_range = envs.unwrapped.config.laser.max_range
     held_out = np.arange(args.num_envs) + 10**6
-    trained_returns, trained = episodes(envs, lambda observation: act(
-        np.broadcast_to(weights, (args.num_envs, *weights.shape)), observation, max_range), held_out)
+    trained_returns, trained = episodes(
+        envs,
+        lambda observation: act(np.broadcast_to(weights, (args.num_envs, *weights.shape)), observation, max_range),
+        held_out,
+    )
     envs.action_space.seed(0)
     random_returns, random = episodes(envs, lambda observation: envs.action_space.sample(), held_out)
-    print(f"held-out mazes: return {trained_returns.mean():.1f} trained, {random_returns.mean():.1f} random; "
-          f"final wall coverage {trained[-1].mean():.1%} trained, {random[-1].mean():.1%} random")
+    print(
+        f"held-out mazes: return {trained_returns.mean():.1f} trained, {random_returns.mean():.1f} random; "
+        f"final wall coverage {trained[-1].mean():.1%} trained, {random[-1].mean():.1%} random"
+    )
     plot(trained, random, history, args)
 
 
@@ -110,8 +124,11 @@ def plot(trained: np.ndarray, random: np.ndarray, history: np.ndarray, args) -> 
         mean, spread = 100 * coverage.mean(axis=1), 100 * coverage.std(axis=1)
         curve.plot(seconds, mean, label=label)
         curve.fill_between(seconds, mean - spread, mean + spread, alpha=0.2)
-    curve.set(xlabel="simulated time (s)", ylabel="wall surface seen (%)",
-              title=f"Coverage on {args.num_envs} held-out {args.size}x{args.size} mazes (mean ± sd)")
+    curve.set(
+        xlabel="simulated time (s)",
+        ylabel="wall surface seen (%)",
+        title=f"Coverage on {args.num_envs} held-out {args.size}x{args.size} mazes (mean ± sd)",
+    )
     curve.legend()
     learning.plot(np.arange(1, len(history) + 1), history, label="mean return of the perturbed policies")
     learning.set(xlabel="generation", ylabel="return (reward units)", title="Training (ES, one episode per env)")

@@ -40,8 +40,7 @@ from mazeslam.smooth_command import optimum_columns
 HERE = Path(__file__).resolve().parent
 FIGURE = HERE.parent / "docs" / "img" / "fastslam_default_maze.png"
 SEEDS = range(5)
-IDEAL_FILTER = dict(association="known", sigmaR=0.0005, sigmaB=math.radians(0.1),
-                    NPARTICLES=1000)
+IDEAL_FILTER = dict(association="known", sigmaR=0.0005, sigmaB=math.radians(0.1), NPARTICLES=1000)
 
 
 def rows_for(seed: int, folder: Path, filter_seeds: int = 1, ideal: bool = False, figure: bool = False) -> list[dict]:
@@ -52,38 +51,66 @@ def rows_for(seed: int, folder: Path, filter_seeds: int = 1, ideal: bool = False
     rows = []
     for version in (1, 2):
         for filter_seed in range(filter_seeds):
-            params = dataclasses.replace(FastSLAMParams(), version=version, seed=filter_seed,
-                                         **(IDEAL_FILTER if ideal else {}))
+            params = dataclasses.replace(
+                FastSLAMParams(), version=version, seed=filter_seed, **(IDEAL_FILTER if ideal else {})
+            )
             slam_config = SlamConfig(fastslam=params)
             result = slam_on_run(run, slam_config, progress=False)
             score = score_run(run, result, slam_config.evaluation.match_radius)
             if not rows:
-                rows.append({"seed": seed, "filter_seed": 0, "estimator": "dead reckoning",
-                             "ate_rmse_m": score.ate(DEAD_RECKONING),
-                             "aligned_ate_rmse_m": score.ate(DEAD_RECKONING, aligned=True)})
+                rows.append(
+                    {
+                        "seed": seed,
+                        "filter_seed": 0,
+                        "estimator": "dead reckoning",
+                        "ate_rmse_m": score.ate(DEAD_RECKONING),
+                        "aligned_ate_rmse_m": score.ate(DEAD_RECKONING, aligned=True),
+                    }
+                )
             optimum = optimum_columns(run, slam_config, score) or {}
-            rows.append({"seed": seed, "filter_seed": filter_seed, "estimator": f"FastSLAM {version}.0",
-                         "ate_rmse_m": score.ate(), "aligned_ate_rmse_m": score.ate(aligned=True),
-                         "map_rmse_m": score.map_errors["as estimated"]["rmse"],
-                         "aligned_map_rmse_m": score.map_errors["aligned"]["rmse"],
-                         "optimum_ate_rmse_m": optimum.get("optimum_ate_rmse"),
-                         "optimum_ratio": optimum.get("optimum_ratio"),
-                         "optimum_aligned_ratio": optimum.get("optimum_aligned_ratio"),
-                         "median_nees": score.nees_summary["median"], "nees_inside_95": score.nees_summary["inside_95"],
-                         "nis_mean": nis_summary(result.nis)["mean"], "resampled_fraction": result.resampled_fraction})
+            rows.append(
+                {
+                    "seed": seed,
+                    "filter_seed": filter_seed,
+                    "estimator": f"FastSLAM {version}.0",
+                    "ate_rmse_m": score.ate(),
+                    "aligned_ate_rmse_m": score.ate(aligned=True),
+                    "map_rmse_m": score.map_errors["as estimated"]["rmse"],
+                    "aligned_map_rmse_m": score.map_errors["aligned"]["rmse"],
+                    "optimum_ate_rmse_m": optimum.get("optimum_ate_rmse"),
+                    "optimum_ratio": optimum.get("optimum_ratio"),
+                    "optimum_aligned_ratio": optimum.get("optimum_aligned_ratio"),
+                    "median_nees": score.nees_summary["median"],
+                    "nees_inside_95": score.nees_summary["inside_95"],
+                    "nis_mean": nis_summary(result.nis)["mean"],
+                    "resampled_fraction": result.resampled_fraction,
+                }
+            )
             if figure and seed == 0 and filter_seed == 0 and version == FastSLAMParams().version:
-                points = slam_report.scan_points_world(run.log, result.mean_poses, run.geometry,
-                                                       slam_config.corners.min_range, slam_config.corners.max_range)
-                slam_report.plot_slam(FIGURE, result, points, run.truth, run.walls,
-                                      title=f"Default maze, seed 0: FastSLAM {version}.0 (default), "
-                                            f"{params.NPARTICLES} particles", true_landmarks=run.true_corners)
+                points = slam_report.scan_points_world(
+                    run.log,
+                    result.mean_poses,
+                    run.geometry,
+                    slam_config.corners.min_range,
+                    slam_config.corners.max_range,
+                )
+                slam_report.plot_slam(
+                    FIGURE,
+                    result,
+                    points,
+                    run.truth,
+                    run.walls,
+                    title=f"Default maze, seed 0: FastSLAM {version}.0 (default), {params.NPARTICLES} particles",
+                    true_landmarks=run.true_corners,
+                )
     return rows
 
 
 def main(filter_seeds: int = 1, ideal: bool = False, figure: bool = False) -> pd.DataFrame:
     with tempfile.TemporaryDirectory() as folder:
-        table = pd.DataFrame([row for seed in SEEDS
-                              for row in rows_for(seed, Path(folder), filter_seeds, ideal, figure)])
+        table = pd.DataFrame(
+            [row for seed in SEEDS for row in rows_for(seed, Path(folder), filter_seeds, ideal, figure)]
+        )
     reckoning = table[table.estimator == "dead reckoning"].set_index("seed")
     for column in ("ate_rmse_m", "aligned_ate_rmse_m"):
         table[column.replace("_m", "_vs_reckoning")] = table[column] / table.seed.map(reckoning[column])
@@ -96,13 +123,17 @@ def markdown(table: pd.DataFrame) -> str:
     means["ate_vs_reckoning_min"] = spread[("ate_rmse_vs_reckoning", "min")]
     means["ate_vs_reckoning_max"] = spread[("ate_rmse_vs_reckoning", "max")]
     means["runs_within_a_third"] = table.groupby("estimator").ate_rmse_vs_reckoning.apply(lambda r: (r <= 1 / 3).mean())
-    return ("Default simulated maze runs, seeds 0-4, 100 particles, default settings (`python "
-            "experiments/fastslam_default_maze.py`; `--filter-seeds K`: K filter seeds per maze; `--ideal`: "
-            "noise-free laser, known association, 1000 particles). Lengths in metres; NEES: median over the "
-            "run's records (consistent: 3); NIS: mean over associated observations (consistent: 2); optimum ratio: the "
-            "filter's ATE over the batch optimum's (1: as good as any estimator).\n\n## Per seed\n\n"
-            + table.to_markdown(index=False, floatfmt=".4g") + "\n\n## Means over seeds\n\n"
-            + means.to_markdown(floatfmt=".4g") + "\n")
+    return (
+        "Default simulated maze runs, seeds 0-4, 100 particles, default settings (`python "
+        "experiments/fastslam_default_maze.py`; `--filter-seeds K`: K filter seeds per maze; `--ideal`: "
+        "noise-free laser, known association, 1000 particles). Lengths in metres; NEES: median over the "
+        "run's records (consistent: 3); NIS: mean over associated observations (consistent: 2); optimum ratio: the "
+        "filter's ATE over the batch optimum's (1: as good as any estimator).\n\n## Per seed\n\n"
+        + table.to_markdown(index=False, floatfmt=".4g")
+        + "\n\n## Means over seeds\n\n"
+        + means.to_markdown(floatfmt=".4g")
+        + "\n"
+    )
 
 
 if __name__ == "__main__":

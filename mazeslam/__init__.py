@@ -31,8 +31,12 @@ def make_vector_env(num_envs: int = 1, max_episode_steps: int | None = None, max
 
 
 if "mazeslam/Maze-v0" not in gymnasium.registry:
-    gymnasium.register(id="mazeslam/Maze-v0", entry_point="mazeslam.envs.maze_env:MazeEnv",
-                       vector_entry_point="mazeslam:make_vector_env", max_episode_steps=MAX_EPISODE_STEPS)
+    gymnasium.register(
+        id="mazeslam/Maze-v0",
+        entry_point="mazeslam.envs.maze_env:MazeEnv",
+        vector_entry_point="mazeslam:make_vector_env",
+        max_episode_steps=MAX_EPISODE_STEPS,
+    )
 
 
 def __getattr__(name: str):

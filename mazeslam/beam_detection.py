@@ -57,9 +57,16 @@ class Detection:
         return min(same, key=lambda c: abs(wrap_angle(c.first_beam_angle - geometry.first_beam_angle))).score
 
 
-def detect_beam_convention(course_log: log.CourseLog, mount_x: float = 0.0, min_range: float = 0.0,
-                           max_range: float = math.inf, jump_tolerance: float = math.inf, step_degrees: float = 1.0,
-                           max_pairs: int = 40, separation: float = 20.0) -> Detection:
+def detect_beam_convention(
+    course_log: log.CourseLog,
+    mount_x: float = 0.0,
+    min_range: float = 0.0,
+    max_range: float = math.inf,
+    jump_tolerance: float = math.inf,
+    step_degrees: float = 1.0,
+    max_pairs: int = 40,
+    separation: float = 20.0,
+) -> Detection:
     """Score first-beam angles every ``step_degrees`` over the full circle, both directions."""
     if course_log.n_beams is None:
         raise ValueError(f"{course_log.source}: no scans to detect a beam convention from")
@@ -91,8 +98,12 @@ def detect_beam_convention(course_log: log.CourseLog, mount_x: float = 0.0, min_
         candidates += [ConventionScore(float(wrap_angle(a)), direction, float(s)) for a, s in zip(angles, scores)]
     ranked = sorted(candidates, key=lambda c: c.score)
     best = ranked[0]
-    runner_up = next(c for c in ranked[1:] if c.direction != best.direction
-                     or abs(wrap_angle(c.first_beam_angle - best.first_beam_angle)) > math.radians(separation))
+    runner_up = next(
+        c
+        for c in ranked[1:]
+        if c.direction != best.direction
+        or abs(wrap_angle(c.first_beam_angle - best.first_beam_angle)) > math.radians(separation)
+    )
     return Detection(best, runner_up, candidates, len(pairs))
 
 
@@ -101,8 +112,15 @@ def _points(ranges: np.ndarray, bearings: np.ndarray, min_range: float, max_rang
     return np.column_stack([ranges[valid] * np.cos(bearings[valid]), ranges[valid] * np.sin(bearings[valid])])
 
 
-def _scan_pairs(course_log: log.CourseLog, mount_x: float, jump_tolerance: float, max_pairs: int,
-                window: int = 12, shortest: float = 0.02, longest: float = 0.25):
+def _scan_pairs(
+    course_log: log.CourseLog,
+    mount_x: float,
+    jump_tolerance: float,
+    max_pairs: int,
+    window: int = 12,
+    shortest: float = 0.02,
+    longest: float = 0.25,
+):
     """Pairs of nearby scans ((record a, record b), sensor motion (dx, dy, dtheta) in a's frame):
     b among the ``window`` scans after a, the sensor moved between ``shortest`` and ``longest``
     metres (enough to tell conventions apart, little enough to see the same walls); the longest
@@ -133,9 +151,14 @@ def _scan_pairs(course_log: log.CourseLog, mount_x: float, jump_tolerance: float
     return chosen
 
 
-def convention_warning(course_log: log.CourseLog, geometry: BeamGeometry, min_range: float = 0.0,
-                       max_range: float = math.inf, jump_tolerance: float = math.inf,
-                       clearly_worse: float = 1.5) -> str | None:
+def convention_warning(
+    course_log: log.CourseLog,
+    geometry: BeamGeometry,
+    min_range: float = 0.0,
+    max_range: float = math.inf,
+    jump_tolerance: float = math.inf,
+    clearly_worse: float = 1.5,
+) -> str | None:
     """A warning naming the better convention when ``geometry``'s scores ``clearly_worse`` times
     the best one's, else None."""
     detection = detect_beam_convention(course_log, geometry.mount_x, min_range, max_range, jump_tolerance)
@@ -143,10 +166,12 @@ def convention_warning(course_log: log.CourseLog, geometry: BeamGeometry, min_ra
     if ratio < clearly_worse:
         return None
     best = detection.best
-    return (f"warning: with beam 0 at {math.degrees(geometry.first_beam_angle):.0f} deg, direction "
-            f"{geometry.direction:+d}, consecutive scans agree {ratio:.1f} times worse than with beam 0 at "
-            f"{math.degrees(best.first_beam_angle):.0f} deg, direction {best.direction:+d}: try "
-            f"--first-beam-angle {best.first_beam_angle:.4f} --beam-direction {best.direction}")
+    return (
+        f"warning: with beam 0 at {math.degrees(geometry.first_beam_angle):.0f} deg, direction "
+        f"{geometry.direction:+d}, consecutive scans agree {ratio:.1f} times worse than with beam 0 at "
+        f"{math.degrees(best.first_beam_angle):.0f} deg, direction {best.direction:+d}: try "
+        f"--first-beam-angle {best.first_beam_angle:.4f} --beam-direction {best.direction}"
+    )
 
 
 def describe(detection: Detection) -> list[str]:

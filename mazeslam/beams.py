@@ -66,8 +66,9 @@ class BeamGeometry:
         ranges = np.asarray(ranges, dtype=float)
         valid = (ranges > 0) & (ranges >= min_range) & (ranges <= max_range)
         bearings = self.bearings(len(ranges))[valid]
-        return np.column_stack([self.mount_x + ranges[valid] * np.cos(bearings),
-                                self.mount_y + ranges[valid] * np.sin(bearings)])
+        return np.column_stack(
+            [self.mount_x + ranges[valid] * np.cos(bearings), self.mount_y + ranges[valid] * np.sin(bearings)]
+        )
 
     def to_dict(self) -> dict:
         return {

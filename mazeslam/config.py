@@ -72,8 +72,9 @@ def read_text(path: str | Path, what: str = "file") -> str:
         raise InputError(f"{path}: broken gzip data ({error})") from error
     except UnicodeDecodeError as error:
         line = error.object[: error.start].count(b"\n") + 1
-        raise InputError(f"{path}:{line}: not a text {what} (not UTF-8: {error.reason} at byte "
-                         f"{error.start})") from error
+        raise InputError(
+            f"{path}:{line}: not a text {what} (not UTF-8: {error.reason} at byte {error.start})"
+        ) from error
 
 
 def from_mapping(cls: type[T], mapping: dict[str, Any], where: str = "config") -> T:
@@ -86,9 +87,7 @@ def from_mapping(cls: type[T], mapping: dict[str, Any], where: str = "config") -
     fields = {f.name: f for f in dataclasses.fields(cls)}
     unknown = sorted(set(mapping) - set(fields))
     if unknown:
-        raise ConfigError(
-            f"{where}: unknown parameter(s) {', '.join(unknown)}; known: {', '.join(sorted(fields))}"
-        )
+        raise ConfigError(f"{where}: unknown parameter(s) {', '.join(unknown)}; known: {', '.join(sorted(fields))}")
     hints = typing.get_type_hints(cls)
     values = {}
     for name, value in mapping.items():
@@ -239,9 +238,11 @@ def with_changes(params: T, **changes) -> T:
     unknown = sorted(set(changes) - set(fields))
     if unknown:
         raise ConfigError(f"{type(params).__name__}: unknown parameter(s) {', '.join(unknown)}")
-    given = {name: check_setting(hints.get(name), name, value, type(params).__name__,
-                                 _allows_infinity(fields[name]))
-             for name, value in changes.items() if value is not None}
+    given = {
+        name: check_setting(hints.get(name), name, value, type(params).__name__, _allows_infinity(fields[name]))
+        for name, value in changes.items()
+        if value is not None
+    }
     if not given:
         return params
     try:

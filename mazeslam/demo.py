@@ -8,8 +8,9 @@ from mazeslam.envs.simulator import SimulationConfig, simulate
 from mazeslam.slam_command import run_slam_command
 
 
-def run_demo(out_dir: str | Path = "runs/demo", seed: int = 0, config: SimulationConfig | None = None,
-             progress: bool = True) -> list[str]:
+def run_demo(
+    out_dir: str | Path = "runs/demo", seed: int = 0, config: SimulationConfig | None = None, progress: bool = True
+) -> list[str]:
     """Simulate ``out_dir``/run.log, then FastSLAM into ``out_dir``/slam/; return the lines to print."""
     out_dir = Path(out_dir)
     result = simulate(out_dir / "run.log", config=config, seed=seed, progress=progress)

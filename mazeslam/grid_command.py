@@ -38,28 +38,44 @@ def run_grid_command(run: LoadedRun, config: SlamConfig, out_dir: Path, progress
     result = run_grid_slam(run.log, run.geometry, run.start_pose, params, progress)
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
-    paths = {"occupancy": write_map(grid_states(result.grid), out_dir),
-             "trajectory": out_dir / "trajectory.csv", "best_trajectory": out_dir / "best_trajectory.csv",
-             "map": out_dir / "map.json"}
+    paths = {
+        "occupancy": write_map(grid_states(result.grid), out_dir),
+        "trajectory": out_dir / "trajectory.csv",
+        "best_trajectory": out_dir / "best_trajectory.csv",
+        "map": out_dir / "map.json",
+    }
     mean, covariances = result.record_trajectory(run.log, run.start_pose, which="mean")
     sidecars.write_trajectory(paths["trajectory"], run.log.times, mean, covariances)
     sidecars.write_truth(paths["best_trajectory"], run.log.times, result.record_trajectory(run.log, run.start_pose)[0])
     duration, seconds = run.log.duration, result.total_seconds
-    lines = [f"{run.path}: {len(run.log)} records, {len(result.scan_records)} scans "
-             f"({int(result.processed.sum())} processed); beam geometry from {run.geometry_origin}",
-             f"grid filter: {params.particles} particles, {result.resamplings} resamplings, {seconds:.1f} s"
-             + (f" ({duration / max(seconds, 1e-9):.1f}x real time)" if duration > 0 else "")
-             + f", peak map memory {result.peak_map_bytes / 2**20:.0f} MB (tiles shared between particles)"]
-    document = {"kind": "grid", "source": str(run.path), "beam_geometry": run.geometry.to_dict(),
-                "start_pose": run.start_pose, "parameters": dataclasses.asdict(params),
-                "scans": len(result.scan_records), "processed_scans": int(result.processed.sum()),
-                "resamplings": result.resamplings, "seconds_total": seconds, "peak_map_bytes": result.peak_map_bytes,
-                "occupancy": paths["occupancy"].name}
+    lines = [
+        f"{run.path}: {len(run.log)} records, {len(result.scan_records)} scans "
+        f"({int(result.processed.sum())} processed); beam geometry from {run.geometry_origin}",
+        f"grid filter: {params.particles} particles, {result.resamplings} resamplings, {seconds:.1f} s"
+        + (f" ({duration / max(seconds, 1e-9):.1f}x real time)" if duration > 0 else "")
+        + f", peak map memory {result.peak_map_bytes / 2**20:.0f} MB (tiles shared between particles)",
+    ]
+    document = {
+        "kind": "grid",
+        "source": str(run.path),
+        "beam_geometry": run.geometry.to_dict(),
+        "start_pose": run.start_pose,
+        "parameters": dataclasses.asdict(params),
+        "scans": len(result.scan_records),
+        "processed_scans": int(result.processed.sum()),
+        "resamplings": result.resamplings,
+        "seconds_total": seconds,
+        "peak_map_bytes": result.peak_map_bytes,
+        "occupancy": paths["occupancy"].name,
+    }
     if run.truth is not None:
         table, nees = _errors(run, result)
-        lines += [f"Errors against {run.truth_label}, at the scans: ATE [m] (aligned: after the best rigid motion); "
-                  f"pose NEES median {nees['median']:.2f}, {100 * (nees['inside_95'] or 0):.0f} % inside "
-                  f"{POSE_BOUND_95:.2f} (consistent: 3)", table.to_markdown(floatfmt=".4f")]
+        lines += [
+            f"Errors against {run.truth_label}, at the scans: ATE [m] (aligned: after the best rigid motion); "
+            f"pose NEES median {nees['median']:.2f}, {100 * (nees['inside_95'] or 0):.0f} % inside "
+            f"{POSE_BOUND_95:.2f} (consistent: 3)",
+            table.to_markdown(floatfmt=".4f"),
+        ]
         document["ate"], document["nees"] = table.reset_index().to_dict(orient="records"), nees
     else:
         lines.append("no ground truth beside the log: no errors to report")
@@ -73,7 +89,13 @@ def _errors(run: LoadedRun, result: GridSlamResult):
     assert run.truth is not None
     records = result.scan_records
     truth = run.truth[records]
-    table = error_table({DEAD_RECKONING: dead_reckoning(run.log, run.start_pose)[records],
-                         GRID_MEAN: result.mean_poses, GRID_BEST: result.best_poses}, truth)
+    table = error_table(
+        {
+            DEAD_RECKONING: dead_reckoning(run.log, run.start_pose)[records],
+            GRID_MEAN: result.mean_poses,
+            GRID_BEST: result.best_poses,
+        },
+        truth,
+    )
     nees = normalized_estimation_error(result.mean_poses, result.covariances, truth)
     return table, nees_summary(nees[np.isfinite(nees)])

@@ -38,23 +38,29 @@ def human_bytes(count: float) -> str:
 
 def particles_problem(count: int) -> str | None:
     if count > MAX_PARTICLES:
-        return (f"{count} particles would take about {human_bytes(count * PARTICLE_BYTES)} "
-                f"(~{human_bytes(PARTICLE_BYTES)} each with 100 landmarks); at most {MAX_PARTICLES}")
+        return (
+            f"{count} particles would take about {human_bytes(count * PARTICLE_BYTES)} "
+            f"(~{human_bytes(PARTICLE_BYTES)} each with 100 landmarks); at most {MAX_PARTICLES}"
+        )
     return None
 
 
 def beams_problem(count: int) -> str | None:
     if count > MAX_BEAMS:
-        return (f"{count} beams would take {human_bytes(count * BEAM_BYTES)} per scan, "
-                f"{human_bytes(count * BEAM_BYTES * 10_000)} for 10000 scans; at most {MAX_BEAMS}")
+        return (
+            f"{count} beams would take {human_bytes(count * BEAM_BYTES)} per scan, "
+            f"{human_bytes(count * BEAM_BYTES * 10_000)} for 10000 scans; at most {MAX_BEAMS}"
+        )
     return None
 
 
 def maze_problem(rows: int, cols: int) -> str | None:
     cells = rows * cols
     if cells > MAX_MAZE_CELLS:
-        return (f"a {rows} x {cols} maze has {cells} cells, which would take about "
-                f"{human_bytes(cells * CELL_BYTES)} to simulate and days to explore; at most {MAX_MAZE_CELLS} cells")
+        return (
+            f"a {rows} x {cols} maze has {cells} cells, which would take about "
+            f"{human_bytes(cells * CELL_BYTES)} to simulate and days to explore; at most {MAX_MAZE_CELLS} cells"
+        )
     return None
 
 

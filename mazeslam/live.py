@@ -34,8 +34,9 @@ def choose_backend() -> tuple[bool, str]:
     import matplotlib.pyplot as plt
 
     wanted = os.environ.get("MPLBACKEND")
-    has_display = sys.platform in ("darwin", "win32") or bool(os.environ.get("DISPLAY")
-                                                               or os.environ.get("WAYLAND_DISPLAY"))
+    has_display = sys.platform in ("darwin", "win32") or bool(
+        os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY")
+    )
     candidates = [wanted] if wanted else (WINDOW_BACKENDS if has_display else ())
     for backend in candidates:
         try:
@@ -62,16 +63,25 @@ class LiveView:
         from mazeslam.filters.corners import CornerExtractor
 
         self.window, backend = choose_backend()
-        self.message = None if self.window else (
-            f"--live: no display for a window (matplotlib backend {backend}); drawing off-screen only. "
-            "Use --animate to write the run as slam.mp4/slam.gif instead.")
+        self.message = (
+            None
+            if self.window
+            else (
+                f"--live: no display for a window (matplotlib backend {backend}); drawing off-screen only. "
+                "Use --animate to write the run as slam.mp4/slam.gif instead."
+            )
+        )
         if self.window:
             plt.ion()
         self.run, self.max_fps = run, max_fps
         self.extractor = CornerExtractor(run.geometry, run.log.width, corner_params) if run.log.n_beams else None
         self.mount = np.array([run.geometry.mount_x, run.geometry.mount_y])
-        extent = view_extent(run.truth, np.asarray(run.start_pose)[None], run.walls.reshape(-1, 2)
-                             if run.walls is not None and len(run.walls) else None, margin=0.3)
+        extent = view_extent(
+            run.truth,
+            np.asarray(run.start_pose)[None],
+            run.walls.reshape(-1, 2) if run.walls is not None and len(run.walls) else None,
+            margin=0.3,
+        )
         self.view = SlamView(run.log.times, np.zeros((0, 3)), extent, title, run.truth, run.walls)
         self.view.scan_at = self._scan
         self.path: list[np.ndarray] = []
@@ -83,8 +93,9 @@ class LiveView:
         if self.extractor is None or not self.run.log.is_scan[index]:
             return np.empty((0, 2)), np.empty((0, 2))
         features = self.extractor.extract(self.run.log.values[index])
-        points = (transform_points(self._pose, features.points + self.mount) if len(features.points)
-                  else np.empty((0, 2)))
+        points = (
+            transform_points(self._pose, features.points + self.mount) if len(features.points) else np.empty((0, 2))
+        )
         corners = np.array([[o.x, o.y] for o in features.observations]).reshape(-1, 2)
         return points, transform_points(self._pose, corners) if len(corners) else corners
 

@@ -235,8 +235,7 @@ def _check_line(parts: list[str], width: int, previous_time: float, first_line: 
         wrong = next((c for c, v in enumerate(values[4:], 5) if v != PADDING), None)
         if wrong is not None:
             return None, (
-                f"odometry record is not padded with -1 after dX and dTheta "
-                f"(column {wrong} is {parts[wrong - 1]})"
+                f"odometry record is not padded with -1 after dX and dTheta (column {wrong} is {parts[wrong - 1]})"
             )
     elif flag == SCAN:
         negative = next((c for c, v in enumerate(values[2:], 3) if v < 0), None)
@@ -252,8 +251,10 @@ def _check_line(parts: list[str], width: int, previous_time: float, first_line: 
             return None, f"landmark range {parts[3]} is not positive"
         wrong = next((c for c, v in enumerate(values[5:], 6) if v != PADDING), None)
         if wrong is not None:
-            return None, ("landmark record is not padded with -1 after id, range and bearing "
-                          f"(column {wrong} is {parts[wrong - 1]})")
+            return None, (
+                "landmark record is not padded with -1 after id, range and bearing "
+                f"(column {wrong} is {parts[wrong - 1]})"
+            )
     else:
         return None, f"flag {parts[1]} is not 0 (odometry), 1 (scan) or 2 (landmark)"
     if t < previous_time:

@@ -33,9 +33,13 @@ class EpisodeSLAM:
     def estimate(self) -> dict:
         """``pose`` (3,), ``pose_covariance`` (3, 3), ``landmarks`` (L, 2), ``particles`` (P, 3)
         poses, ``effective_sample_size``."""
-        return {"pose": self.slam.mean_pose(), "pose_covariance": self.slam.pose_covariance(),
-                "landmarks": self.slam.landmarks()[0], "particles": self.slam.poses.copy(),
-                "effective_sample_size": self.last_report.effective_sample_size}
+        return {
+            "pose": self.slam.mean_pose(),
+            "pose_covariance": self.slam.pose_covariance(),
+            "landmarks": self.slam.landmarks()[0],
+            "particles": self.slam.poses.copy(),
+            "effective_sample_size": self.last_report.effective_sample_size,
+        }
 
 
 class OnlineFastSLAM(gym.Wrapper):
@@ -81,8 +85,9 @@ class VectorOnlineFastSLAM(gym.vector.VectorWrapper):
     (E, 3, 3), ``particles`` (E, P, 3), ``effective_sample_size`` (E,), and ``landmarks`` an (E,)
     object array of (L, 2) arrays."""
 
-    def __init__(self, env: gym.vector.VectorEnv, params: FastSLAMParams | None = None,
-                 corners: CornerParams | None = None):
+    def __init__(
+        self, env: gym.vector.VectorEnv, params: FastSLAMParams | None = None, corners: CornerParams | None = None
+    ):
         super().__init__(env)
         self.params = params or FastSLAMParams()
         self.corner_params = corners or CornerParams()
@@ -123,8 +128,10 @@ class VectorOnlineFastSLAM(gym.vector.VectorWrapper):
 
     def _estimates(self) -> dict:
         estimates = [self._episode(env).estimate() for env in range(self.num_envs)]
-        stacked = {key: np.array([estimate[key] for estimate in estimates])
-                   for key in ("pose", "pose_covariance", "particles", "effective_sample_size")}
+        stacked = {
+            key: np.array([estimate[key] for estimate in estimates])
+            for key in ("pose", "pose_covariance", "particles", "effective_sample_size")
+        }
         landmarks = np.empty(self.num_envs, dtype=object)
         landmarks[:] = [estimate["landmarks"] for estimate in estimates]
         return {**stacked, "landmarks": landmarks}

@@ -21,8 +21,14 @@ class Number(click.ParamType):
     """A finite float (or an int with ``integer=True``) in ``[low, high]`` (``low_open``: excluded),
     refused with ``problem(value)``'s reason when that returns one."""
 
-    def __init__(self, low: float | None = None, high: float | None = None, low_open: bool = False,
-                 integer: bool = False, problem: Callable[[float], str | None] | None = None):
+    def __init__(
+        self,
+        low: float | None = None,
+        high: float | None = None,
+        low_open: bool = False,
+        integer: bool = False,
+        problem: Callable[[float], str | None] | None = None,
+    ):
         self.low, self.high, self.low_open, self.integer, self.problem = low, high, low_open, integer, problem
         self.name = "integer" if integer else "float"
 

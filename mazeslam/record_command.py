@@ -15,9 +15,26 @@ from mazeslam.envs.simulator import SimulationConfig
 from mazeslam.robot.recorder import KeyboardController, Recorder, ScriptedController
 
 
-def run_record(out, port=None, camera=None, sim=False, maze="random", seed=0, beams=180, scan_period=0.75,
-               odometry_rate=5.0, center=None, inner_radius=40.0, outer_radius=None, height=0.126, alpha=107.0,
-               threshold="180", script=None, duration=None, geometry_overrides=None) -> list[str]:
+def run_record(
+    out,
+    port=None,
+    camera=None,
+    sim=False,
+    maze="random",
+    seed=0,
+    beams=180,
+    scan_period=0.75,
+    odometry_rate=5.0,
+    center=None,
+    inner_radius=40.0,
+    outer_radius=None,
+    height=0.126,
+    alpha=107.0,
+    threshold="180",
+    script=None,
+    duration=None,
+    geometry_overrides=None,
+) -> list[str]:
     """Record one log; returns the lines to print."""
     geometry = with_changes(EXERCISE_CONVENTION, **(geometry_overrides or {}))
     config = SimulationConfig()
@@ -28,8 +45,9 @@ def run_record(out, port=None, camera=None, sim=False, maze="random", seed=0, be
     else:
         if not port or camera is None:
             raise ValueError("give --port and --camera for the real e-puck, or --sim for the simulator")
-        robot = _real_robot(port, camera, geometry, beams, center, inner_radius, outer_radius, height, alpha, threshold,
-                            config)
+        robot = _real_robot(
+            port, camera, geometry, beams, center, inner_radius, outer_radius, height, alpha, threshold, config
+        )
     controller = _controller(script, config)
     recorder = Recorder(robot, out, beams, geometry, scan_period, odometry_rate, config.robot.wheelbase)
     interactive = isinstance(controller, KeyboardController)
@@ -40,8 +58,10 @@ def run_record(out, port=None, camera=None, sim=False, maze="random", seed=0, be
             controller.close()
         robot.close()
     stopped = f" (stopped by {recorder.stopped_by})" if recorder.stopped_by else ""
-    return [f"wrote {out}: {records} records{stopped}; map sidecar with the beam geometry"
-            + (" and truth sidecar" if sim else "")]
+    return [
+        f"wrote {out}: {records} records{stopped}; map sidecar with the beam geometry"
+        + (" and truth sidecar" if sim else "")
+    ]
 
 
 def _real_robot(port, camera, geometry, beams, center, inner_radius, outer_radius, height, alpha, threshold, config):
@@ -58,8 +78,15 @@ def _real_robot(port, camera, geometry, beams, center, inner_radius, outer_radiu
         found_x, found_y, found_radius = detect_mirror(frame)
         center = center or (found_x, found_y)
         outer_radius = outer_radius or 0.95 * found_radius
-    calibration = CameraCalibration(center[0], center[1], inner_radius, outer_radius, height, alpha,
-                                    "otsu" if threshold == "otsu" else int(threshold))
+    calibration = CameraCalibration(
+        center[0],
+        center[1],
+        inner_radius,
+        outer_radius,
+        height,
+        alpha,
+        "otsu" if threshold == "otsu" else int(threshold),
+    )
     return EPuck(port, OmniCamera(capture, calibration, geometry, beams), config.robot)
 
 
@@ -72,6 +99,8 @@ def _controller(script, config):
 
 
 def _status(t, command, records) -> None:
-    sys.stdout.write(f"\rt {t:7.1f} s  speed {command.speed:+.3f} m/s  turn {command.turn_rate:+.2f} rad/s  "
-                     f"records {records}   (w/s speed, a/d turn, space stop, q quit)")
+    sys.stdout.write(
+        f"\rt {t:7.1f} s  speed {command.speed:+.3f} m/s  turn {command.turn_rate:+.2f} rad/s  "
+        f"records {records}   (w/s speed, a/d turn, space stop, q quit)"
+    )
     sys.stdout.flush()

@@ -11,8 +11,19 @@ from __future__ import annotations
 from pathlib import Path
 
 #: The files ``mazeslam slam`` writes (glob patterns, in its output folder).
-SLAM_FILES = ("trajectory.csv", "best_trajectory.csv", "map.json", "*.tum", "slam.png", "slam.gif", "slam.mp4",
-              "occupancy.pgm", "occupancy.yaml", "occupancy.png", "landmarks.csv")
+SLAM_FILES = (
+    "trajectory.csv",
+    "best_trajectory.csv",
+    "map.json",
+    "*.tum",
+    "slam.png",
+    "slam.gif",
+    "slam.mp4",
+    "occupancy.pgm",
+    "occupancy.yaml",
+    "occupancy.png",
+    "landmarks.csv",
+)
 #: The files ``mazeslam smooth`` writes.
 SMOOTH_FILES = ("trajectory.csv", "map.json", "*.tum", "smooth.png")
 

@@ -61,6 +61,14 @@ def load_scans(path: str | Path, sensor: SensorOverrides | None = None, strict: 
     if run.log.n_beams is None:
         raise ValueError(f"{path}: the log has no scan records")
     records = np.flatnonzero(run.log.is_scan)
-    return ScanSet(str(path), run.log.times[records], records, run.log.values[records], run.geometry,
-                   run.geometry_origin, None if run.truth is None else run.truth[records],
-                   None if run.world is None else run.true_corners, run)
+    return ScanSet(
+        str(path),
+        run.log.times[records],
+        records,
+        run.log.values[records],
+        run.geometry,
+        run.geometry_origin,
+        None if run.truth is None else run.truth[records],
+        None if run.world is None else run.true_corners,
+        run,
+    )

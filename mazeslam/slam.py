@@ -74,11 +74,19 @@ class SlamResult:
         return self.resamplings / len(self.reports) if self.reports else 0.0
 
 
-def run_fastslam(course_log: log.CourseLog, params: FastSLAMParams | None = None,
-                 corner_params: CornerParams | None = None, geometry: BeamGeometry = EXERCISE_CONVENTION,
-                 start_pose=(0.0, 0.0, 0.0), progress: bool = True, snapshot_every: int = 0,
-                 jump_tolerance: float = math.inf, identify=None, laser: LaserOdometry | None = None,
-                 on_update=None) -> SlamResult:
+def run_fastslam(
+    course_log: log.CourseLog,
+    params: FastSLAMParams | None = None,
+    corner_params: CornerParams | None = None,
+    geometry: BeamGeometry = EXERCISE_CONVENTION,
+    start_pose=(0.0, 0.0, 0.0),
+    progress: bool = True,
+    snapshot_every: int = 0,
+    jump_tolerance: float = math.inf,
+    identify=None,
+    laser: LaserOdometry | None = None,
+    on_update=None,
+) -> SlamResult:
     """FastSLAM over every record of ``course_log``; odometry records travelling more than
     ``jump_tolerance`` metres are left out (listed in ``SlamResult.dropped_odometry``).
 
@@ -128,8 +136,9 @@ def run_fastslam(course_log: log.CourseLog, params: FastSLAMParams | None = None
                 done = list(group)
                 z = np.array([[r.range, r.bearing] for r in group])
                 covariances, ids, facings = None, np.array([r.landmark for r in group]), None
-            reports.append(slam.update(z, covariances, ids if params.association == Association.KNOWN else None,
-                                       facings))
+            reports.append(
+                slam.update(z, covariances, ids if params.association == Association.KNOWN else None, facings)
+            )
             if snapshot_every and (len(reports) - 1) % snapshot_every == 0:
                 snapshots.append((record.index, slam.poses.copy(), slam.landmarks()[0]))
             if on_update is not None:
@@ -143,9 +152,21 @@ def run_fastslam(course_log: log.CourseLog, params: FastSLAMParams | None = None
         bar.update(len(done))
     bar.close()
     landmarks, covariances = slam.landmarks()
-    return SlamResult(course_log.times, mean_poses, best_poses, landmarks, covariances, step_seconds,
-                      filter=slam, pose_covariances=pose_covariances, reports=reports, resamplings=slam.resamplings,
-                      snapshots=snapshots, dropped_odometry=dropped, laser_odometry=laser)
+    return SlamResult(
+        course_log.times,
+        mean_poses,
+        best_poses,
+        landmarks,
+        covariances,
+        step_seconds,
+        filter=slam,
+        pose_covariances=pose_covariances,
+        reports=reports,
+        resamplings=slam.resamplings,
+        snapshots=snapshots,
+        dropped_odometry=dropped,
+        laser_odometry=laser,
+    )
 
 
 def _scan_observations(extractor: CornerExtractor, record: log.ScanRecord):
@@ -157,15 +178,21 @@ def _scan_observations(extractor: CornerExtractor, record: log.ScanRecord):
 def _same_time_landmarks(records: list, position: int) -> list[log.LandmarkRecord]:
     """The landmark records from ``position`` on (a landmark record) that share its timestamp."""
     group: list[log.LandmarkRecord] = [records[position]]
-    for record in records[position + 1:]:
+    for record in records[position + 1 :]:
         if not isinstance(record, log.LandmarkRecord) or record.t != group[0].t:
             break
         group.append(record)
     return group
 
 
-def slam_on_run(run: LoadedRun, config: SlamConfig | None = None, progress: bool = True, snapshot_every: int = 0,
-                laser: LaserOdometry | None = None, on_update=None) -> SlamResult:
+def slam_on_run(
+    run: LoadedRun,
+    config: SlamConfig | None = None,
+    progress: bool = True,
+    snapshot_every: int = 0,
+    laser: LaserOdometry | None = None,
+    on_update=None,
+) -> SlamResult:
     """``run_fastslam`` on a loaded log, from its start pose with its beam geometry.
 
     With ``[scan_matching] enabled`` the filter moves by the log's laser odometry: ``laser`` if
@@ -174,8 +201,10 @@ def slam_on_run(run: LoadedRun, config: SlamConfig | None = None, progress: bool
     config = config or SlamConfig()
     course_log = run.log
     if config.scan_matching.enabled and (not course_log.is_scan.any() or course_log.is_landmark.any()):
-        raise ValueError(f"{run.path}: [scan_matching] needs a log of scans (laser odometry moves the filter scan to "
-                         "scan); this one has landmark records or no scans: turn it off")
+        raise ValueError(
+            f"{run.path}: [scan_matching] needs a log of scans (laser odometry moves the filter scan to "
+            "scan); this one has landmark records or no scans: turn it off"
+        )
     if not config.scan_matching.enabled:
         laser = None
     elif laser is None:
@@ -183,12 +212,28 @@ def slam_on_run(run: LoadedRun, config: SlamConfig | None = None, progress: bool
     identify = None
     if config.fastslam.association == Association.KNOWN and course_log.is_scan.any():
         identify = truth_identities(run, config.evaluation.match_radius)
-    return run_fastslam(course_log, config.fastslam, config.corners, run.geometry, run.start_pose, progress,
-                        snapshot_every, config.odometry.jump_tolerance, identify, laser, on_update)
+    return run_fastslam(
+        course_log,
+        config.fastslam,
+        config.corners,
+        run.geometry,
+        run.start_pose,
+        progress,
+        snapshot_every,
+        config.odometry.jump_tolerance,
+        identify,
+        laser,
+        on_update,
+    )
 
 
-def slam_on_file(path: str | Path, config: SlamConfig | None = None, progress: bool = True,
-                 snapshot_every: int = 0, laser: LaserOdometry | None = None) -> SlamResult:
+def slam_on_file(
+    path: str | Path,
+    config: SlamConfig | None = None,
+    progress: bool = True,
+    snapshot_every: int = 0,
+    laser: LaserOdometry | None = None,
+) -> SlamResult:
     """``slam_on_run`` on a log file (its sidecars read beside it, ``[sensor]`` applied)."""
     config = config or SlamConfig()
     return slam_on_run(load_run(path, config.sensor), config, progress, snapshot_every, laser)

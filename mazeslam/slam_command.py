@@ -24,17 +24,28 @@ from mazeslam.smooth_command import optimum_columns, optimum_line
 ANIMATION_FRAMES = 150
 
 
-def run_slam_command(log_file, config_path, out_dir, filter_changes: dict | None = None,
-                     sensor: SensorOverrides | None = None, animate=False, progress=True, live=False,
-                     echo=None) -> list[str]:
+def run_slam_command(
+    log_file,
+    config_path,
+    out_dir,
+    filter_changes: dict | None = None,
+    sensor: SensorOverrides | None = None,
+    animate=False,
+    progress=True,
+    live=False,
+    echo=None,
+) -> list[str]:
     """Run, write ``out_dir``/{trajectory.csv, best_trajectory.csv, map.json, slam.png, occupancy.pgm/.yaml/.png,
     landmarks.csv[, slam.gif]};
     return the lines to print. ``filter_changes`` replace ``[fastslam]`` settings and ``sensor``
     the ``[sensor]`` ones (None values: keep the config's). ``live``: draw the filter as it runs
     (``mazeslam.live``; its note when there is no window goes to ``echo`` at once, and to the lines)."""
     config = load_slam_config(config_path)
-    config = dataclasses.replace(config, fastslam=with_changes(config.fastslam, **(filter_changes or {})),
-                                 sensor=(sensor or SensorOverrides()).over(config.sensor))
+    config = dataclasses.replace(
+        config,
+        fastslam=with_changes(config.fastslam, **(filter_changes or {})),
+        sensor=(sensor or SensorOverrides()).over(config.sensor),
+    )
     run = load_run(log_file, config.sensor)
     if config.map.kind == MapKind.GRID:
         from mazeslam.grid_command import run_grid_command
@@ -56,16 +67,24 @@ def run_slam_command(log_file, config_path, out_dir, filter_changes: dict | None
     matching_seconds = time.perf_counter() - began - result.step_seconds.sum()
     lines = _run_lines(run, config, result, matching_seconds)
     if view is not None:
-        lines.append(f"Live view: {view.frames} frames drawn in {view.drawing_seconds:.1f} s"
-                     + ("" if view.window else " (off-screen: no display)"))
+        lines.append(
+            f"Live view: {view.frames} frames drawn in {view.drawing_seconds:.1f} s"
+            + ("" if view.window else " (off-screen: no display)")
+        )
     score = score_run(run, result, config.evaluation.match_radius)
     nis = nis_summary(result.nis)
     line_numbers = run.log.line_numbers
     assert line_numbers is not None  # the log was read from a file: each record has its line
-    extra = {"source": str(log_file), "beam_geometry": run.geometry.to_dict(), "start_pose": run.start_pose.tolist(),
-             "parameters": dataclasses.asdict(config), "consistency": slam_report.consistency(result),
-             "nis": nis, "resampled_fraction": result.resampled_fraction,
-             "dropped_odometry_lines": [int(line_numbers[r.index]) for r in result.dropped_odometry]}
+    extra = {
+        "source": str(log_file),
+        "beam_geometry": run.geometry.to_dict(),
+        "start_pose": run.start_pose.tolist(),
+        "parameters": dataclasses.asdict(config),
+        "consistency": slam_report.consistency(result),
+        "nis": nis,
+        "resampled_fraction": result.resampled_fraction,
+        "dropped_odometry_lines": [int(line_numbers[r.index]) for r in result.dropped_odometry],
+    }
     lines += _uncertainty_lines(nis, score.nees_summary if score is not None else None)
     if score is not None:
         lines += _score_lines(run, result, score, config.evaluation.match_radius)
@@ -82,22 +101,45 @@ def run_slam_command(log_file, config_path, out_dir, filter_changes: dict | None
     if run.truth is not None:
         paths["truth_tum"] = Path(out_dir) / "truth.tum"
         sidecars.write_tum(paths["truth_tum"], run.log.times, run.truth)
-    points = slam_report.scan_points_world(run.log, result.mean_poses, run.geometry, config.corners.min_range,
-                                           config.corners.max_range)
+    points = slam_report.scan_points_world(
+        run.log, result.mean_poses, run.geometry, config.corners.min_range, config.corners.max_range
+    )
     truth_label = "reference path" if run.truth_is_reference else "true path"
-    paths["figure"] = slam_report.plot_slam(Path(out_dir) / "slam.png", result, points, run.truth, run.walls,
-                                            title=f"{run.path.name}: FastSLAM, {config.fastslam.NPARTICLES} particles",
-                                            true_landmarks=run.true_corners if run.world is not None else None,
-                                            truth_label=truth_label)
-    paths.update(export_map(out_dir, run.log, result.mean_poses, run.geometry, result.landmarks,
-                            result.landmark_covariances, config.corners.min_range, config.corners.max_range))
+    paths["figure"] = slam_report.plot_slam(
+        Path(out_dir) / "slam.png",
+        result,
+        points,
+        run.truth,
+        run.walls,
+        title=f"{run.path.name}: FastSLAM, {config.fastslam.NPARTICLES} particles",
+        true_landmarks=run.true_corners if run.world is not None else None,
+        truth_label=truth_label,
+    )
+    paths.update(
+        export_map(
+            out_dir,
+            run.log,
+            result.mean_poses,
+            run.geometry,
+            result.landmarks,
+            result.landmark_covariances,
+            config.corners.min_range,
+            config.corners.max_range,
+        )
+    )
     if animate:
         extractor = CornerExtractor(run.geometry, run.log.width, config.corners)
         paths["animation"] = slam_report.animate_slam(
-            Path(out_dir) / "slam.gif", result, points, run.truth, run.walls,
+            Path(out_dir) / "slam.gif",
+            result,
+            points,
+            run.truth,
+            run.walls,
             scan_at=scan_source(run.log, result.mean_poses, run.geometry, extractor) if run.log.n_beams else None,
-            title=f"{run.path.name}: FastSLAM, {config.fastslam.NPARTICLES} particles", progress=progress,
-            truth_label=truth_label)
+            title=f"{run.path.name}: FastSLAM, {config.fastslam.NPARTICLES} particles",
+            progress=progress,
+            truth_label=truth_label,
+        )
     lines.append("wrote " + ", ".join(str(p) for p in paths.values()))
     return lines
 
@@ -105,45 +147,62 @@ def run_slam_command(log_file, config_path, out_dir, filter_changes: dict | None
 def _run_lines(run: LoadedRun, config: SlamConfig, result: SlamResult, matching_seconds: float) -> list[str]:
     """What the run did: records, particles, resamplings, speed, laser odometry, warnings, glitches."""
     course_log, seconds = run.log, result.step_seconds.sum()
-    speed = (f" ({course_log.duration / max(seconds, 1e-9):.0f}x real time)" if course_log.duration > 0
-             else " (the log's timestamps span no time)")
-    lines = [f"{run.path}: {len(course_log)} records, {len(result.reports)} observation updates; "
-             f"beam geometry from {run.geometry_origin}",
-             f"FastSLAM: {config.fastslam.NPARTICLES} particles, {result.resamplings} resamplings, "
-             f"{len(result.landmarks)} landmarks in the best particle's map, {seconds:.2f} s" + speed]
+    speed = (
+        f" ({course_log.duration / max(seconds, 1e-9):.0f}x real time)"
+        if course_log.duration > 0
+        else " (the log's timestamps span no time)"
+    )
+    lines = [
+        f"{run.path}: {len(course_log)} records, {len(result.reports)} observation updates; "
+        f"beam geometry from {run.geometry_origin}",
+        f"FastSLAM: {config.fastslam.NPARTICLES} particles, {result.resamplings} resamplings, "
+        f"{len(result.landmarks)} landmarks in the best particle's map, {seconds:.2f} s" + speed,
+    ]
     if result.laser_odometry is not None:
         laser = result.laser_odometry
-        lines.append(f"Laser odometry ({matching_seconds:.1f} s): {int(laser.accepted.sum())} of "
-                     f"{len(laser.accepted) - 1} scan-to-scan matches accepted; "
-                     "intervals without odometry records (matched by correlative search): "
-                     f"{int((~laser.had_odometry[1:]).sum())}")
+        lines.append(
+            f"Laser odometry ({matching_seconds:.1f} s): {int(laser.accepted.sum())} of "
+            f"{len(laser.accepted) - 1} scan-to-scan matches accepted; "
+            "intervals without odometry records (matched by correlative search): "
+            f"{int((~laser.had_odometry[1:]).sum())}"
+        )
     if not run.geometry_from_sidecar and course_log.is_scan.sum() > 1:
-        warning = convention_warning(course_log, run.geometry, config.corners.min_range, config.corners.max_range,
-                                     config.odometry.jump_tolerance)
+        warning = convention_warning(
+            course_log, run.geometry, config.corners.min_range, config.corners.max_range, config.odometry.jump_tolerance
+        )
         if warning:
             lines.append(warning)
     if result.dropped_odometry:
         line_numbers = course_log.line_numbers
         assert line_numbers is not None  # the log was read from a file: each record has its line
-        lines.append(f"left out {len(result.dropped_odometry)} odometry records travelling more than "
-                     f"{config.odometry.jump_tolerance:g} m in one step (glitches): "
-                     + ", ".join(f"line {line_numbers[r.index]} (t {r.t:.3f} s, dX {r.distance:+.4f} m, "
-                                 f"dTheta {r.turn:+.4f} rad)" for r in result.dropped_odometry))
+        lines.append(
+            f"left out {len(result.dropped_odometry)} odometry records travelling more than "
+            f"{config.odometry.jump_tolerance:g} m in one step (glitches): "
+            + ", ".join(
+                f"line {line_numbers[r.index]} (t {r.t:.3f} s, dX {r.distance:+.4f} m, dTheta {r.turn:+.4f} rad)"
+                for r in result.dropped_odometry
+            )
+        )
     checks = slam_report.consistency(result)
-    lines.append(f"Map consistency: {checks['reobserved']} of {checks['landmarks']} landmarks re-observed "
-                 f"(median {checks['median_observations']:.0f} observations each), the nearest two "
-                 f"{checks['nearest_landmarks_m']:.3f} m apart; largest path step between records "
-                 f"{checks['largest_path_step_m']:.3f} m")
+    lines.append(
+        f"Map consistency: {checks['reobserved']} of {checks['landmarks']} landmarks re-observed "
+        f"(median {checks['median_observations']:.0f} observations each), the nearest two "
+        f"{checks['nearest_landmarks_m']:.3f} m apart; largest path step between records "
+        f"{checks['largest_path_step_m']:.3f} m"
+    )
     return lines
 
 
 def _uncertainty_lines(nis: dict, nees: dict | None) -> list[str]:
     """Is the stated uncertainty right: NIS always, NEES with truth, and what they mean."""
+
     def described(summary: dict, bound: float, consistent: int) -> str:
         if not summary["count"]:
             return "undefined"
-        return (f"mean {summary['mean']:.2f}, median {summary['median']:.2f}, {100 * summary['inside_95']:.0f} % "
-                f"inside the 95 % bound {bound:.2f} (consistent: {consistent})")
+        return (
+            f"mean {summary['mean']:.2f}, median {summary['median']:.2f}, {100 * summary['inside_95']:.0f} % "
+            f"inside the 95 % bound {bound:.2f} (consistent: {consistent})"
+        )
 
     line = f"Uncertainty: NIS of {nis['count']} associated observations {described(nis, OBSERVATION_BOUND_95, 2)}"
     if nees is not None:
@@ -153,14 +212,21 @@ def _uncertainty_lines(nis: dict, nees: dict | None) -> list[str]:
 
 def _score_lines(run: LoadedRun, result: SlamResult, score, match_radius: float) -> list[str]:
     """The error table against the truth and the map's errors."""
-    scored = ("at the scans (laser odometry: no pose between scans)" if result.laser_odometry is not None
-              else "at every record")
-    lines = [f"Errors against {run.truth_label}, {scored}: ATE [m] (aligned: after the best rigid motion), RPE over "
-             f"{RPE_DISTANCE} m of path [m, rad], NEES of the mean pose (consistent: 3):",
-             score.table.to_markdown(floatfmt=".4f")]
+    scored = (
+        "at the scans (laser odometry: no pose between scans)"
+        if result.laser_odometry is not None
+        else "at every record"
+    )
+    lines = [
+        f"Errors against {run.truth_label}, {scored}: ATE [m] (aligned: after the best rigid motion), RPE over "
+        f"{RPE_DISTANCE} m of path [m, rad], NEES of the mean pose (consistent: 3):",
+        score.table.to_markdown(floatfmt=".4f"),
+    ]
     if not len(run.true_corners):
         return lines + ["Map: no true corners beside the log, the map is not scored"]
     for name, errors in score.map_errors.items():
-        lines.append(f"Map ({name}): {errors['matched']} landmarks within {match_radius:g} m of a true one, "
-                     f"RMSE {errors['rmse']:.4f} m, precision {errors['precision']:.2f}, recall {errors['recall']:.2f}")
+        lines.append(
+            f"Map ({name}): {errors['matched']} landmarks within {match_radius:g} m of a true one, "
+            f"RMSE {errors['rmse']:.4f} m, precision {errors['precision']:.2f}, recall {errors['recall']:.2f}"
+        )
     return lines

@@ -100,8 +100,12 @@ def _without_glitches(run: LoadedRun, jump_tolerance: float) -> CourseLog:
 
 def has_known_optimum(run: LoadedRun) -> bool:
     """The run can be smoothed with known association: truth, true corners and a log of scans."""
-    return (run.truth is not None and len(run.true_corners) > 0 and bool(run.log.is_scan.any())
-            and not run.log.is_landmark.any())
+    return (
+        run.truth is not None
+        and len(run.true_corners) > 0
+        and bool(run.log.is_scan.any())
+        and not run.log.is_landmark.any()
+    )
 
 
 def known_optimum(run: LoadedRun, config: SlamConfig) -> Smoothed:
@@ -117,16 +121,21 @@ def optimum_columns(run: LoadedRun, config: SlamConfig, score: RunScore) -> dict
         return None
     poses, truth = known_optimum(run, config).poses[score.records], run.truth[score.records]
     row = error_table({OPTIMUM: poses}, truth).loc[OPTIMUM]
-    return {"optimum_ate_rmse": row["ate_rmse"], "optimum_ate_aligned_rmse": row["aligned_rmse"],
-            "optimum_ratio": score.ate() / row["ate_rmse"],
-            "optimum_aligned_ratio": score.ate(aligned=True) / row["aligned_rmse"]}
+    return {
+        "optimum_ate_rmse": row["ate_rmse"],
+        "optimum_ate_aligned_rmse": row["aligned_rmse"],
+        "optimum_ratio": score.ate() / row["ate_rmse"],
+        "optimum_aligned_ratio": score.ate(aligned=True) / row["aligned_rmse"],
+    }
 
 
 def optimum_line(columns: dict) -> str:
     """``optimum_columns`` as one line for ``mazeslam slam``."""
-    return (f"Batch optimum (known association, the filter's noise): ATE {columns['optimum_ate_rmse']:.4f} m "
-            f"(aligned {columns['optimum_ate_aligned_rmse']:.4f} m); FastSLAM/optimum ratio "
-            f"{columns['optimum_ratio']:.2f} (aligned {columns['optimum_aligned_ratio']:.2f})")
+    return (
+        f"Batch optimum (known association, the filter's noise): ATE {columns['optimum_ate_rmse']:.4f} m "
+        f"(aligned {columns['optimum_ate_aligned_rmse']:.4f} m); FastSLAM/optimum ratio "
+        f"{columns['optimum_ratio']:.2f} (aligned {columns['optimum_aligned_ratio']:.2f})"
+    )
 
 
 def from_run_identities(run: LoadedRun, run_dir: str | Path, radius: float):
@@ -139,8 +148,9 @@ def from_run_identities(run: LoadedRun, run_dir: str | Path, radius: float):
         raise ValueError(f"{run_dir}: not a `mazeslam slam` output folder, missing {', '.join(missing)}")
     poses = sidecars.read_trajectory(paths[0])[1]
     if len(poses) != len(run.log):
-        raise ValueError(f"{paths[0]}: {len(poses)} poses for the {len(run.log)} records of {run.path}: "
-                         "a run of another log?")
+        raise ValueError(
+            f"{paths[0]}: {len(poses)} poses for the {len(run.log)} records of {run.path}: a run of another log?"
+        )
     try:
         landmarks = np.asarray(json.loads(read_text(paths[1], "map"))["landmarks"], dtype=float).reshape(-1, 2)
     except (json.JSONDecodeError, KeyError, TypeError, ValueError) as error:
@@ -161,8 +171,9 @@ def map_identities(run: LoadedRun, poses: np.ndarray, landmarks, radius: float):
     return truth_identities(dataclasses.replace(run, truth=np.asarray(poses), world={"corners": landmarks}), radius)
 
 
-def run_smooth_command(log_file, config_path, out_dir, association: str = "known", run_dir=None,
-                       sensor: SensorOverrides | None = None) -> list[str]:
+def run_smooth_command(
+    log_file, config_path, out_dir, association: str = "known", run_dir=None, sensor: SensorOverrides | None = None
+) -> list[str]:
     """Smooth, write ``out_dir``/{trajectory.csv, trajectory.tum, map.json, smooth.png}; return the
     lines to print. ``association``: "known" (the truth's corners) or "from-run" (``run_dir``'s map)."""
     config = load_slam_config(config_path)
@@ -172,25 +183,44 @@ def run_smooth_command(log_file, config_path, out_dir, association: str = "known
     radius = config.evaluation.match_radius
     if association == "known":
         if run.truth is None or not len(run.true_corners):
-            raise ValueError(f"{run.path}: --association known needs the truth and map sidecars with the true corners "
-                             f"({run.name}.truth.csv, {run.name}.map.json); use --association from-run RUN_DIR")
+            raise ValueError(
+                f"{run.path}: --association known needs the truth and map sidecars with the true corners "
+                f"({run.name}.truth.csv, {run.name}.map.json); use --association from-run RUN_DIR"
+            )
         identify, how = truth_identities(run, radius), f"known: the true corner within {radius:g} m"
     else:
         identify = from_run_identities(run, run_dir, radius)
         how = f"from the run {run_dir}: its map's nearest landmark within {radius:g} m"
     smoothed = smooth_run(run, config, identify)
     result = smoothed.result
-    lines = [(f"{run.path}: {len(result.poses)} scan poses, {len(result.landmarks)} landmarks, "
-              f"association {how}; beam geometry from {run.geometry_origin}"),
-             (f"Batch optimum: {result.iterations} iterations "
-              f"({'converged' if result.converged else 'NOT converged'}), "
-              f"{smoothed.seconds:.2f} s; chi2 {result.chi2:.1f} over {result.dof} degrees of freedom, chi2/dof "
-              f"{result.chi2_per_dof:.2f} (1: the noise model fits the residuals; below: it overstates the noise)")]
-    document = {"frame": "world; metres", "source": str(log_file), "association": how,
-                "landmark_ids": result.landmark_ids.tolist(), "landmarks": result.landmarks.round(6).tolist(),
-                "landmark_covariances": result.landmark_covariances.tolist(), "chi2": result.chi2, "dof": result.dof,
-                "chi2_per_dof": result.chi2_per_dof, "iterations": result.iterations, "converged": result.converged,
-                "scans": len(result.poses), "seconds": smoothed.seconds, "parameters": dataclasses.asdict(config)}
+    lines = [
+        (
+            f"{run.path}: {len(result.poses)} scan poses, {len(result.landmarks)} landmarks, "
+            f"association {how}; beam geometry from {run.geometry_origin}"
+        ),
+        (
+            f"Batch optimum: {result.iterations} iterations "
+            f"({'converged' if result.converged else 'NOT converged'}), "
+            f"{smoothed.seconds:.2f} s; chi2 {result.chi2:.1f} over {result.dof} degrees of freedom, chi2/dof "
+            f"{result.chi2_per_dof:.2f} (1: the noise model fits the residuals; below: it overstates the noise)"
+        ),
+    ]
+    document = {
+        "frame": "world; metres",
+        "source": str(log_file),
+        "association": how,
+        "landmark_ids": result.landmark_ids.tolist(),
+        "landmarks": result.landmarks.round(6).tolist(),
+        "landmark_covariances": result.landmark_covariances.tolist(),
+        "chi2": result.chi2,
+        "dof": result.dof,
+        "chi2_per_dof": result.chi2_per_dof,
+        "iterations": result.iterations,
+        "converged": result.converged,
+        "scans": len(result.poses),
+        "seconds": smoothed.seconds,
+        "parameters": dataclasses.asdict(config),
+    }
     if run.truth is not None:
         errors, error_lines = _errors(run, run.truth, smoothed, radius)
         document.update(errors)
@@ -207,22 +237,34 @@ def _errors(run: LoadedRun, truth: np.ndarray, smoothed: Smoothed, radius: float
     (``run.truth``): for map.json and to print."""
     result = smoothed.result
     table = error_table({DEAD_RECKONING: dead_reckoning(run.log, run.start_pose), OPTIMUM: smoothed.poses}, truth)
-    nees = nees_summary(normalized_estimation_error(result.poses, result.pose_covariances,
-                                                    truth[result.scan_records]))
-    aligned = (apply_se2(align_se2(smoothed.poses, truth), result.landmarks) if len(result.landmarks)
-               else result.landmarks)
-    map_errors = {"as estimated": map_error(result.landmarks, run.true_corners, radius),
-                  "aligned": map_error(aligned, run.true_corners, radius)}
-    lines = [(f"Errors against {run.truth_label} at every record: ATE [m] (aligned: after the best rigid motion), "
-              "RPE [m, rad]:"), table.to_markdown(floatfmt=".4f"),
-             f"Pose NEES at the {nees['count']} scans (consistent: 3): "
-             + (f"mean {nees['mean']:.2f}, median {nees['median']:.2f}, "
-                f"{100 * nees['inside_95']:.0f} % inside the 95 % bound"
-                if nees["count"] else "undefined")]
+    nees = nees_summary(normalized_estimation_error(result.poses, result.pose_covariances, truth[result.scan_records]))
+    aligned = (
+        apply_se2(align_se2(smoothed.poses, truth), result.landmarks) if len(result.landmarks) else result.landmarks
+    )
+    map_errors = {
+        "as estimated": map_error(result.landmarks, run.true_corners, radius),
+        "aligned": map_error(aligned, run.true_corners, radius),
+    }
+    lines = [
+        (
+            f"Errors against {run.truth_label} at every record: ATE [m] (aligned: after the best rigid motion), "
+            "RPE [m, rad]:"
+        ),
+        table.to_markdown(floatfmt=".4f"),
+        f"Pose NEES at the {nees['count']} scans (consistent: 3): "
+        + (
+            f"mean {nees['mean']:.2f}, median {nees['median']:.2f}, "
+            f"{100 * nees['inside_95']:.0f} % inside the 95 % bound"
+            if nees["count"]
+            else "undefined"
+        ),
+    ]
     if len(run.true_corners):
         errors = map_errors["as estimated"]
-        lines.append(f"Map: {errors['matched']} landmarks within {radius:g} m of a true one, "
-                     f"RMSE {errors['rmse']:.4f} m (aligned {map_errors['aligned']['rmse']:.4f} m)")
+        lines.append(
+            f"Map: {errors['matched']} landmarks within {radius:g} m of a true one, "
+            f"RMSE {errors['rmse']:.4f} m (aligned {map_errors['aligned']['rmse']:.4f} m)"
+        )
     return {"ate": table.reset_index().to_dict(orient="records"), "nees": nees, "map_error": map_errors}, lines
 
 
@@ -233,8 +275,9 @@ def _write_outputs(out_dir: Path, run: LoadedRun, config: SlamConfig, smoothed: 
     sidecars.write_trajectory(paths["trajectory"], run.log.times, smoothed.poses, smoothed.covariances)
     sidecars.write_tum(paths["tum"], run.log.times, smoothed.poses)
     paths["map"].write_text(json.dumps(jsonable(document), indent=1, allow_nan=False) + "\n")
-    points = scan_points_world(run.log, smoothed.poses, run.geometry, config.corners.min_range,
-                               config.corners.max_range)
+    points = scan_points_world(
+        run.log, smoothed.poses, run.geometry, config.corners.min_range, config.corners.max_range
+    )
     paths["figure"] = plot_smoothed(out_dir / "smooth.png", run, smoothed, points)
     return paths
 
@@ -247,15 +290,18 @@ def plot_smoothed(path, run: LoadedRun, smoothed: Smoothed, points: np.ndarray) 
         ax.plot([x1, x2], [y1, y2], color="0.6", linewidth=1.0)
     if len(points):
         ax.plot(*points.T, ".", color="black", markersize=0.8, alpha=0.4, label="scan points")
-    paths = {"dead reckoning": (dead_reckoning(run.log, run.start_pose), "0.5"),
-             "batch optimum": (smoothed.poses, "tab:blue")}
+    paths = {
+        "dead reckoning": (dead_reckoning(run.log, run.start_pose), "0.5"),
+        "batch optimum": (smoothed.poses, "tab:blue"),
+    }
     if run.truth is not None:
         paths["reference path" if run.truth_is_reference else "true path"] = (run.truth, "tab:green")
     for label, (poses, colour) in paths.items():
         ax.plot(poses[:, 0], poses[:, 1], color=colour, linewidth=1.2, label=label)
     if len(run.true_corners):
-        ax.plot(*run.true_corners.T, "o", color="tab:green", markersize=4, markerfacecolor="none",
-                label="true landmarks")
+        ax.plot(
+            *run.true_corners.T, "o", color="tab:green", markersize=4, markerfacecolor="none", label="true landmarks"
+        )
     result = smoothed.result
     for mean, covariance in zip(result.landmarks, result.landmark_covariances):
         ax.add_patch(_ellipse(mean, covariance))

@@ -81,8 +81,9 @@ class LoopFastSLAM(FastSLAM):
             self.seen[p, j] = 1
             self.missed[p, j] = 0
             matched_now.add(j)
-            self.log_weights[p] += -0.5 * self.params.new_landmark_gate - LOG_TWO_PI - 0.5 * math.log(
-                np.linalg.det(noise[k]))
+            self.log_weights[p] += (
+                -0.5 * self.params.new_landmark_gate - LOG_TWO_PI - 0.5 * math.log(np.linalg.det(noise[k]))
+            )
             report.new += 1
         for j in range(self.exists.shape[1]):
             if not self.exists[p, j] or j in matched_now or self.seen[p, j] > 1:

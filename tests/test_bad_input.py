@@ -81,18 +81,31 @@ def test_slam_to_an_unwritable_folder_stops_before_the_filter(small_log, unwrita
     assert time.perf_counter() - started < 5
 
 
-@pytest.mark.parametrize("command", [
-    lambda log, bad: ["simulate", "--out", bad / "x.log", "--duration", "1", "--quiet"],
-    lambda log, bad: ["smooth", log, "--out", bad],
-    lambda log, bad: ["calibrate", log, "--write", bad / "c.toml", "--quiet"],
-    lambda log, bad: ["corners", log, "--json", bad / "c.json"],
-    lambda log, bad: ["corners", log, "--plot", bad / "c.png"],
-    lambda log, bad: ["corners", log, "--animate", bad / "c.gif"],
-    lambda log, bad: ["import", "carmen", log, "--out", bad / "x.log"],
-    lambda log, bad: ["record", "--sim", "--out", bad / "x.log"],
-    lambda log, bad: ["demo", "--out", bad, "--quiet"],
-], ids=["simulate", "smooth", "calibrate", "corners-json", "corners-plot", "corners-animate", "import", "record",
-        "demo"])
+@pytest.mark.parametrize(
+    "command",
+    [
+        lambda log, bad: ["simulate", "--out", bad / "x.log", "--duration", "1", "--quiet"],
+        lambda log, bad: ["smooth", log, "--out", bad],
+        lambda log, bad: ["calibrate", log, "--write", bad / "c.toml", "--quiet"],
+        lambda log, bad: ["corners", log, "--json", bad / "c.json"],
+        lambda log, bad: ["corners", log, "--plot", bad / "c.png"],
+        lambda log, bad: ["corners", log, "--animate", bad / "c.gif"],
+        lambda log, bad: ["import", "carmen", log, "--out", bad / "x.log"],
+        lambda log, bad: ["record", "--sim", "--out", bad / "x.log"],
+        lambda log, bad: ["demo", "--out", bad, "--quiet"],
+    ],
+    ids=[
+        "simulate",
+        "smooth",
+        "calibrate",
+        "corners-json",
+        "corners-plot",
+        "corners-animate",
+        "import",
+        "record",
+        "demo",
+    ],
+)
 def test_every_writing_command_probes_its_output_first(small_log, unwritable, command):
     refused(*command(small_log, unwritable), expect=str(unwritable.parent))
 
@@ -113,13 +126,22 @@ def test_simulate_duration_must_be_a_sane_number(tmp_path, value):
 
 
 def test_simulate_maze_that_is_a_folder(tmp_path):
-    refused("simulate", "--out", tmp_path / "x.log", "--maze", tmp_path, "--duration", "1",
-            expect=[str(tmp_path), "folder"])
+    refused(
+        "simulate", "--out", tmp_path / "x.log", "--maze", tmp_path, "--duration", "1", expect=[str(tmp_path), "folder"]
+    )
 
 
 def test_simulate_maze_that_is_a_course_log_says_so_briefly(tmp_path, small_log):
-    output = refused("simulate", "--out", tmp_path / "x.log", "--maze", small_log, "--duration", "1",
-                     expect=["not a maze file", f"{small_log}:1"])
+    output = refused(
+        "simulate",
+        "--out",
+        tmp_path / "x.log",
+        "--maze",
+        small_log,
+        "--duration",
+        "1",
+        expect=["not a maze file", f"{small_log}:1"],
+    )
     assert len(output.strip().splitlines()[-1]) < 250
 
 
@@ -129,10 +151,16 @@ def test_simulate_maze_that_is_binary(tmp_path):
     refused("simulate", "--out", tmp_path / "x.log", "--maze", maze, expect=[str(maze), "not UTF-8"])
 
 
-@pytest.mark.parametrize("option, value, expect", [
-    ("--rows", "1000 --cols 1000", "cells"), ("--beams", "1000000000", "GB"), ("--seed", "-1", "--seed"),
-    ("--seed", "1.5", "--seed"), ("--rows", "0", "--rows"),
-])
+@pytest.mark.parametrize(
+    "option, value, expect",
+    [
+        ("--rows", "1000 --cols 1000", "cells"),
+        ("--beams", "1000000000", "GB"),
+        ("--seed", "-1", "--seed"),
+        ("--seed", "1.5", "--seed"),
+        ("--rows", "0", "--rows"),
+    ],
+)
 def test_simulate_sizes_and_seeds(tmp_path, option, value, expect):
     refused("simulate", "--out", tmp_path / "x.log", option, *value.split(), "--duration", "1", expect=expect)
 
@@ -141,7 +169,8 @@ def test_simulate_sizes_and_seeds(tmp_path, option, value, expect):
 
 
 CARMEN = "PARAM robot_front_laser_max 50 nohost 0\n" + "".join(
-    f"FLASER 5 1.0 2.0 3.0 2.0 1.0 {0.1 * k} 0 0 {0.1 * k} 0 0 {10 + k} nohost {10 + k}\n" for k in range(20))
+    f"FLASER 5 1.0 2.0 3.0 2.0 1.0 {0.1 * k} 0 0 {0.1 * k} 0 0 {10 + k} nohost {10 + k}\n" for k in range(20)
+)
 
 
 def test_carmen_gzip_with_a_bad_crc(tmp_path):
@@ -163,17 +192,29 @@ def test_mrclam_truncated_gzip(tmp_path):
     dataset = tmp_path / "MRCLAM"
     dataset.mkdir()
     (dataset / "Robot1_Odometry.dat.gz").write_bytes(gzip.compress(b"0 0.1 0.0\n" * 50)[:-12])
-    output = refused("import", "mrclam", dataset, "--robot", "1", "--out", tmp_path / "x.log",
-                     expect=["Robot1_Odometry.dat.gz", "cut off"])
+    output = refused(
+        "import",
+        "mrclam",
+        dataset,
+        "--robot",
+        "1",
+        "--out",
+        tmp_path / "x.log",
+        expect=["Robot1_Odometry.dat.gz", "cut off"],
+    )
     assert "Aborted" not in output
 
 
-@pytest.mark.parametrize("command", [
-    lambda path, tmp: ["import", "carmen", path, "--out", tmp / "x.log"],
-    lambda path, tmp: ["info", path],
-    lambda path, tmp: ["slam", path, "--out", tmp / "s", "--quiet"],
-    lambda path, tmp: ["corners", path],
-], ids=["carmen", "info", "slam", "corners"])
+@pytest.mark.parametrize(
+    "command",
+    [
+        lambda path, tmp: ["import", "carmen", path, "--out", tmp / "x.log"],
+        lambda path, tmp: ["info", path],
+        lambda path, tmp: ["slam", path, "--out", tmp / "s", "--quiet"],
+        lambda path, tmp: ["corners", path],
+    ],
+    ids=["carmen", "info", "slam", "corners"],
+)
 def test_non_utf8_input_names_the_file_and_line(tmp_path, command):
     path = tmp_path / "binary.log"
     path.write_bytes(b"0.0 0 0.1 0.0\n" + b"\x89PNG\x00\xff\xfe\n")
@@ -195,27 +236,30 @@ def test_sidecars_that_are_not_sidecars(tmp_path, small_log):
 # -- settings: type, finiteness, range, size ------------------------------------------------------
 
 
-@pytest.mark.parametrize("section, line, expect", [
-    ("fastslam", "NPARTICLES = 1.5", "[fastslam]: NPARTICLES = 1.5: must be an integer"),
-    ("fastslam", "NPARTICLES = true", "[fastslam]: NPARTICLES = true: must be an integer"),
-    ("fastslam", "NPARTICLES = 1180591620717411303424", "1180591620717411303424: must be an integer within"),
-    ("fastslam", "NPARTICLES = 1000000000", "TB"),
-    ("fastslam", "seed = 1.5", "[fastslam]: seed = 1.5: must be an integer"),
-    ("fastslam", "seed = -1", "seed must be a non-negative integer"),
-    ("fastslam", "sigmaTH = 1e300", "[fastslam]: sigmaTH = 1e+300: is out of range"),
-    ("fastslam", "sigmaX = true", "[fastslam]: sigmaX = true: must be a number"),
-    ("fastslam", 'sigmaX = "0.1"', "must be a number"),
-    ("fastslam", "sigmaX = nan", "not nan"),
-    ("scan_matching", 'enabled = "yes"', "[scan_matching]: enabled = 'yes': must be true or false"),
-    ("sensor", "first_beam_angle = nan", "[sensor]: first_beam_angle = nan: must be a number, not nan"),
-    ("sensor", "mount_x = inf", "must be finite"),
-    ("evaluation", "match_radius = -1", "match_radius must be in (0, 100]"),
-    ("scan_matching.correlative", "turn_step = inf", "turn_step = inf: must be finite"),
-    ("corners", "max_range = inf", None),  # an infinite limit: no limit, accepted
-    ("corners", "max_range = nan", "not nan"),
-    ("corners", "covariance_scale = {corner = true}", "entry 'corner' (true) must be a number"),
-    ("scan_matching", "correspondence_distances = [1.0, nan]", "item 2 (nan)"),
-])
+@pytest.mark.parametrize(
+    "section, line, expect",
+    [
+        ("fastslam", "NPARTICLES = 1.5", "[fastslam]: NPARTICLES = 1.5: must be an integer"),
+        ("fastslam", "NPARTICLES = true", "[fastslam]: NPARTICLES = true: must be an integer"),
+        ("fastslam", "NPARTICLES = 1180591620717411303424", "1180591620717411303424: must be an integer within"),
+        ("fastslam", "NPARTICLES = 1000000000", "TB"),
+        ("fastslam", "seed = 1.5", "[fastslam]: seed = 1.5: must be an integer"),
+        ("fastslam", "seed = -1", "seed must be a non-negative integer"),
+        ("fastslam", "sigmaTH = 1e300", "[fastslam]: sigmaTH = 1e+300: is out of range"),
+        ("fastslam", "sigmaX = true", "[fastslam]: sigmaX = true: must be a number"),
+        ("fastslam", 'sigmaX = "0.1"', "must be a number"),
+        ("fastslam", "sigmaX = nan", "not nan"),
+        ("scan_matching", 'enabled = "yes"', "[scan_matching]: enabled = 'yes': must be true or false"),
+        ("sensor", "first_beam_angle = nan", "[sensor]: first_beam_angle = nan: must be a number, not nan"),
+        ("sensor", "mount_x = inf", "must be finite"),
+        ("evaluation", "match_radius = -1", "match_radius must be in (0, 100]"),
+        ("scan_matching.correlative", "turn_step = inf", "turn_step = inf: must be finite"),
+        ("corners", "max_range = inf", None),  # an infinite limit: no limit, accepted
+        ("corners", "max_range = nan", "not nan"),
+        ("corners", "covariance_scale = {corner = true}", "entry 'corner' (true) must be a number"),
+        ("scan_matching", "correspondence_distances = [1.0, nan]", "item 2 (nan)"),
+    ],
+)
 def test_bad_slam_config_values_name_file_section_key_value_and_reason(tmp_path, section, line, expect):
     path = tmp_path / "c.toml"
     path.write_text(f"[{section}]\n{line}\n")
@@ -228,16 +272,19 @@ def test_bad_slam_config_values_name_file_section_key_value_and_reason(tmp_path,
     assert expect in str(caught.value)
 
 
-@pytest.mark.parametrize("section, line, expect", [
-    ("laser", "beams = 1000000000", "GB"),
-    ("maze", "rows = 1000\ncols = 1000", "cells"),
-    ("maze", "rows = 4.0", "must be an integer"),
-    ("logger", "physics_rate = 1e9", "at most 10000 Hz"),
-    ("", "max_duration = inf", "must be finite"),
-    ("", "max_duration = 1e8", "days"),
-    ("laser.geometry", "first_beam_angle = nan", "not nan"),
-    ("robot", "mass = -inf", "must be finite"),
-])
+@pytest.mark.parametrize(
+    "section, line, expect",
+    [
+        ("laser", "beams = 1000000000", "GB"),
+        ("maze", "rows = 1000\ncols = 1000", "cells"),
+        ("maze", "rows = 4.0", "must be an integer"),
+        ("logger", "physics_rate = 1e9", "at most 10000 Hz"),
+        ("", "max_duration = inf", "must be finite"),
+        ("", "max_duration = 1e8", "days"),
+        ("laser.geometry", "first_beam_angle = nan", "not nan"),
+        ("robot", "mass = -inf", "must be finite"),
+    ],
+)
 def test_bad_simulation_config_values(tmp_path, section, line, expect):
     path = tmp_path / "sim.toml"
     path.write_text((f"[{section}]\n" if section else "") + f"{line}\n")
@@ -256,35 +303,49 @@ def test_config_file_that_is_not_text(tmp_path):
 
 def test_with_changes_checks_types_like_files():
     params = FastSLAMParams()
-    for change, expect in [({"NPARTICLES": 1.5}, "must be an integer"), ({"NPARTICLES": True}, "must be an integer"),
-                           ({"sigmaX": float("nan")}, "not nan"), ({"seed": 2**70}, "64 bits"),
-                           ({"nonsense": 1}, "unknown parameter")]:
+    for change, expect in [
+        ({"NPARTICLES": 1.5}, "must be an integer"),
+        ({"NPARTICLES": True}, "must be an integer"),
+        ({"sigmaX": float("nan")}, "not nan"),
+        ({"seed": 2**70}, "64 bits"),
+        ({"nonsense": 1}, "unknown parameter"),
+    ]:
         with pytest.raises(ConfigError, match=expect):
             with_changes(params, **change)
     assert with_changes(params, sigmaX=1).sigmaX == 1.0
     assert from_mapping(FastSLAMParams, {"sigmaR": 0}).sigmaR == 0.0
 
 
-@pytest.mark.parametrize("options, expect", [
-    (["--particles", "1000000000"], ["--particles", "TB"]),
-    (["--particles", "0"], "--particles"),
-    (["--particles", "1.5"], "--particles"),
-    (["--seed", "-1"], "--seed"),
-    (["--first-beam-angle", "nan"], "--first-beam-angle"),
-    (["--first-beam-angle", "inf"], "--first-beam-angle"),
-    (["--mount-x", "inf"], "--mount-x"),
-    (["--mount-x", "1e6"], "mount_x"),
-    (["--beam-direction", "2"], "--beam-direction"),
-])
+@pytest.mark.parametrize(
+    "options, expect",
+    [
+        (["--particles", "1000000000"], ["--particles", "TB"]),
+        (["--particles", "0"], "--particles"),
+        (["--particles", "1.5"], "--particles"),
+        (["--seed", "-1"], "--seed"),
+        (["--first-beam-angle", "nan"], "--first-beam-angle"),
+        (["--first-beam-angle", "inf"], "--first-beam-angle"),
+        (["--mount-x", "inf"], "--mount-x"),
+        (["--mount-x", "1e6"], "mount_x"),
+        (["--beam-direction", "2"], "--beam-direction"),
+    ],
+)
 def test_slam_options_name_the_option(small_log, tmp_path, options, expect):
     refused("slam", small_log, "--out", tmp_path / "s", "--quiet", *options, expect=expect)
 
 
-@pytest.mark.parametrize("options, expect", [
-    (["--beams", "1000000000"], "--beams"), (["--scan-period", "nan"], "--scan-period"),
-    (["--odometry-rate", "inf"], "--odometry-rate"), (["--duration", "inf"], "--duration"),
-    (["--seed", "-1"], "--seed"), (["--height", "0"], "--height"), (["--center", "nan", "1"], "--center"),
-])
+@pytest.mark.parametrize(
+    "options, expect",
+    [
+        (["--beams", "1000000000"], "--beams"),
+        (["--scan-period", "nan"], "--scan-period"),
+        (["--odometry-rate", "inf"], "--odometry-rate"),
+        (["--duration", "inf"], "--duration"),
+        (["--seed", "-1"], "--seed"),
+        (["--height", "0"], "--height"),
+        (["--center", "nan", "1"], "--center"),
+    ],
+)
 def test_record_options_name_the_option(tmp_path, options, expect):
     refused("record", "--sim", "--out", tmp_path / "x.log", *options, expect=expect)
 
@@ -313,8 +374,10 @@ def _sweep_with_finished_runs(tmp_path):
     sweep = load_sweep(path)
     out = tmp_path / "out"
     out.mkdir()
-    rows = [{"run_id": run_id(sweep, run), "seed": run["seed"], "slam.fastslam.NPARTICLES": 5, "ate_rmse": 0.01}
-            for run in sweep.runs()]
+    rows = [
+        {"run_id": run_id(sweep, run), "seed": run["seed"], "slam.fastslam.NPARTICLES": 5, "ate_rmse": 0.01}
+        for run in sweep.runs()
+    ]
     return path, sweep, out, rows
 
 
@@ -370,9 +433,26 @@ def _start_recording(tmp_path) -> tuple[subprocess.Popen, Path]:
     script = tmp_path / "drive.txt"
     script.write_text("100000 0.02 0.3\n")
     out = tmp_path / "rec.log"
-    process = subprocess.Popen([sys.executable, "-c", "from mazeslam.cli import run; run()", "record", "--sim",
-                                "--maze", str(MAZE), "--beams", "36", "--script", str(script), "--out", str(out)],
-                               stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    process = subprocess.Popen(
+        [
+            sys.executable,
+            "-c",
+            "from mazeslam.cli import run; run()",
+            "record",
+            "--sim",
+            "--maze",
+            str(MAZE),
+            "--beams",
+            "36",
+            "--script",
+            str(script),
+            "--out",
+            str(out),
+        ],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
     deadline = time.monotonic() + 60
     while time.monotonic() < deadline:
         if out.exists() and out.read_text().count("\n") > 30:

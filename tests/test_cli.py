@@ -15,8 +15,9 @@ def invoke(*args):
 
 def test_simulate_writes_log_and_sidecars(tmp_path):
     out = tmp_path / "runs" / "demo.log"
-    result = invoke("simulate", "--out", out, "--seed", 4, "--rows", 3, "--cols", 5, "--beams", 120,
-                    "--duration", 15, "--quiet")
+    result = invoke(
+        "simulate", "--out", out, "--seed", 4, "--rows", 3, "--cols", 5, "--beams", 120, "--duration", 15, "--quiet"
+    )
     assert result.exit_code == 0, result.output
     assert f"wrote {out}" in result.output
     course_log = log.read(out)
@@ -35,8 +36,7 @@ def test_info_summarises_a_log(default_run):
 def test_info_on_a_broken_log_names_the_line_and_exits_2(tmp_path):
     path = tmp_path / "broken.log"
     path.write_text("0.0 0 0 0 -1 -1\n0.1 1 0.5 0.5 zz 0.5\n")
-    process = subprocess.run([sys.executable, "-m", "mazeslam.cli", "info", str(path)],
-                             capture_output=True, text=True)
+    process = subprocess.run([sys.executable, "-m", "mazeslam.cli", "info", str(path)], capture_output=True, text=True)
     assert process.returncode == 2
     assert f"error: {path}:2: value 'zz' in column 5 is not a number" in process.stderr
 
@@ -77,8 +77,16 @@ def test_help(command):
 
 
 def test_corners_command_plots_and_writes_json(default_run, tmp_path):
-    result = invoke("corners", default_run.log_path, "--scan", 3, "--plot", tmp_path / "scan.png",
-                    "--json", tmp_path / "corners.json")
+    result = invoke(
+        "corners",
+        default_run.log_path,
+        "--scan",
+        3,
+        "--plot",
+        tmp_path / "scan.png",
+        "--json",
+        tmp_path / "corners.json",
+    )
     assert result.exit_code == 0, result.output
     assert "sidecar" in result.output  # the beam geometry came from the map sidecar
     assert (tmp_path / "scan.png").stat().st_size > 10_000
@@ -100,15 +108,36 @@ def test_corners_endpoint_mode_and_animation(default_run, tmp_path):
 
 
 def test_corners_refuses_a_scan_that_does_not_exist(default_run, tmp_path):
-    process = subprocess.run([sys.executable, "-m", "mazeslam.cli", "corners", str(default_run.log_path),
-                              "--scan", "100000", "--plot", str(tmp_path / "x.png")], capture_output=True, text=True)
+    process = subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "mazeslam.cli",
+            "corners",
+            str(default_run.log_path),
+            "--scan",
+            "100000",
+            "--plot",
+            str(tmp_path / "x.png"),
+        ],
+        capture_output=True,
+        text=True,
+    )
     assert process.returncode == 2
     assert "scan 100000 does not exist" in process.stderr
 
 
 def test_corners_on_the_exercise_robot_log(course_log_path, tmp_path):
-    result = invoke("corners", course_log_path, "--config", PROJECT_ROOT / "configs" / "corners" / "course.toml",
-                    "--first-beam-angle", 0, "--mount-x", 0.11)
+    result = invoke(
+        "corners",
+        course_log_path,
+        "--config",
+        PROJECT_ROOT / "configs" / "corners" / "course.toml",
+        "--first-beam-angle",
+        0,
+        "--mount-x",
+        0.11,
+    )
     assert result.exit_code == 0, result.output
     assert "overridden by first_beam_angle, mount_x" in result.output
 
@@ -122,7 +151,8 @@ def test_info_detects_the_beam_convention_and_slam_warns_about_a_wrong_one(cours
     result = invoke("slam", course_log_path, "--config", config, "--out", tmp_path / "s", "--quiet")
     assert "warning: with beam 0 at -180 deg" in result.output
     assert "left out 5 odometry records" in result.output
-    result = invoke("slam", course_log_path, "--config", config, "--first-beam-angle", 0, "--out", tmp_path / "s",
-                    "--quiet")
+    result = invoke(
+        "slam", course_log_path, "--config", config, "--first-beam-angle", 0, "--out", tmp_path / "s", "--quiet"
+    )
     assert "warning" not in result.output
     assert (tmp_path / "s" / "slam.png").exists()

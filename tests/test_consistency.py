@@ -11,8 +11,17 @@ from mazeslam.evaluation.consistency import OBSERVATION_BOUND_95, POSE_BOUND_95,
 from mazeslam.evaluation.metrics import normalized_estimation_error
 from mazeslam.filters.fastslam import FastSLAM, FastSLAMParams
 
-EXACT = FastSLAMParams(NPARTICLES=1, sigmaX=0, sigmaTH=0, sigmaTH_drive=0, sigmaR=0.01, sigmaB=0.02,
-                       observation_scale=0.0, resample_threshold=0, inflation=1.0)
+EXACT = FastSLAMParams(
+    NPARTICLES=1,
+    sigmaX=0,
+    sigmaTH=0,
+    sigmaTH_drive=0,
+    sigmaR=0.01,
+    sigmaB=0.02,
+    observation_scale=0.0,
+    resample_threshold=0,
+    inflation=1.0,
+)
 
 
 def test_the_pose_covariance_is_the_weighted_covariance_of_the_cloud():
@@ -37,7 +46,8 @@ def test_the_trajectory_file_round_trips_poses_and_covariances(tmp_path):
     poses = rng.normal(size=(4, 3))
     sidecars.write_trajectory(tmp_path / "t.csv", np.arange(4) * 0.2, poses, covariances)
     assert (tmp_path / "t.csv").read_text().splitlines()[0] == (
-        "t,x,y,theta,cov_xx,cov_xy,cov_xtheta,cov_yy,cov_ytheta,cov_thetatheta")
+        "t,x,y,theta,cov_xx,cov_xy,cov_xtheta,cov_yy,cov_ytheta,cov_thetatheta"
+    )
     times, read_poses, read_covariances = sidecars.read_trajectory(tmp_path / "t.csv")
     np.testing.assert_allclose(times, np.arange(4) * 0.2)
     np.testing.assert_allclose(read_poses, poses, atol=1e-6)
@@ -46,8 +56,9 @@ def test_the_trajectory_file_round_trips_poses_and_covariances(tmp_path):
 
 def test_nees_by_hand():
     # Error (0.1 m, 0, 0.2 rad) under a diagonal covariance (0.01, 1, 0.04): 1 + 0 + 1 = 2.
-    nees = normalized_estimation_error(np.array([[1.1, 2.0, 0.2]]), np.diag([0.01, 1.0, 0.04])[None],
-                                       np.array([[1.0, 2.0, 0.0]]))
+    nees = normalized_estimation_error(
+        np.array([[1.1, 2.0, 0.2]]), np.diag([0.01, 1.0, 0.04])[None], np.array([[1.0, 2.0, 0.0]])
+    )
     assert nees[0] == pytest.approx(2.0)
     # The heading error is wrapped: 3.1 vs -3.1 rad is 0.083 rad apart, not 6.2.
     wrapped = normalized_estimation_error(np.array([[0.0, 0.0, 3.1]]), np.eye(3)[None], np.array([[0.0, 0.0, -3.1]]))

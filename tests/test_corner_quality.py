@@ -16,8 +16,10 @@ from mazeslam.filters.corners import CornerParams
 def maze_logs(tmp_path_factory):
     folder = tmp_path_factory.mktemp("quality")
     config = dataclasses.replace(SimulationConfig(), maze=MazeParams(rows=5, cols=5))
-    return [simulate(folder / f"maze{seed}.log", config=config, seed=seed, duration=90, progress=False).log_path
-            for seed in (11, 12, 13)]
+    return [
+        simulate(folder / f"maze{seed}.log", config=config, seed=seed, duration=90, progress=False).log_path
+        for seed in (11, 12, 13)
+    ]
 
 
 def test_precision_and_recall_within_2cm_at_default_noise(maze_logs):
@@ -35,9 +37,11 @@ def test_observability_of_a_hand_made_room():
     caster = RayCaster(walls, bearings, 3.0)
     faces = corner_faces(walls, corners)
     assert all(len(f) == 2 for f in faces)
-    seen = observable_corners((0.3, 0.4, 0.0), caster, 2 * np.pi / 180, corners, faces, np.zeros(4, bool),
-                              CornerParams(), max_range=3.0)
+    seen = observable_corners(
+        (0.3, 0.4, 0.0), caster, 2 * np.pi / 180, corners, faces, np.zeros(4, bool), CornerParams(), max_range=3.0
+    )
     assert seen.all()
-    near_only = observable_corners((0.2, 0.2, 0.0), caster, 2 * np.pi / 180, corners, faces, np.zeros(4, bool),
-                                   CornerParams(), max_range=0.5)
+    near_only = observable_corners(
+        (0.2, 0.2, 0.0), caster, 2 * np.pi / 180, corners, faces, np.zeros(4, bool), CornerParams(), max_range=0.5
+    )
     assert near_only.tolist() == [True, False, False, False]

@@ -12,10 +12,12 @@ from mazeslam.geometry import inverse, transform_points
 ROOM = np.array([[0, 0, 1, 0], [1, 0, 1, 1], [1, 1, 0, 1], [0, 1, 0, 0]], dtype=float)
 ROOM_CORNERS = np.array([[0, 0], [1, 0], [1, 1], [0, 1]], dtype=float)
 # The room with a 0.4 m long, 2 cm thick wall sticking in from the bottom at x = 0.5.
-PENINSULA = np.vstack([
-    [[0, 0, 0.49, 0], [0.51, 0, 1, 0], [1, 0, 1, 1], [1, 1, 0, 1], [0, 1, 0, 0]],
-    [[0.49, 0, 0.49, 0.4], [0.49, 0.4, 0.51, 0.4], [0.51, 0.4, 0.51, 0]],
-])
+PENINSULA = np.vstack(
+    [
+        [[0, 0, 0.49, 0], [0.51, 0, 1, 0], [1, 0, 1, 1], [1, 1, 0, 1], [0, 1, 0, 0]],
+        [[0.49, 0, 0.49, 0.4], [0.49, 0.4, 0.51, 0.4], [0.51, 0.4, 0.51, 0]],
+    ]
+)
 
 
 def scan(surfaces, pose, noise=0.0, seed=0, beams=180, max_range=3.0, **geometry):
@@ -74,8 +76,9 @@ def test_wall_end_is_a_landmark_and_the_occluded_end_is_not():
     assert occluded, "the far wall's end point behind the tip is an occluded end"
     assert all(o.kind in ("corner", "wall_end") for o in corners_mode.observations)
     # Every fixed landmark is a true corner of the scene.
-    true_corners = in_robot_frame(pose, [[0, 0], [1, 0], [1, 1], [0, 1], [0.49, 0], [0.51, 0],
-                                         [0.49, 0.4], [0.51, 0.4]])
+    true_corners = in_robot_frame(
+        pose, [[0, 0], [1, 0], [1, 1], [0, 1], [0.49, 0], [0.51, 0], [0.49, 0.4], [0.51, 0.4]]
+    )
     assert nearest_distances(found(corners_mode), true_corners).max() < 0.01
 
 
@@ -102,8 +105,7 @@ def test_front_fan_of_a_real_laser():
 @pytest.mark.parametrize("first_beam_angle, direction", [(0.0, 1), (math.pi / 2, -1), (-math.pi, 1)])
 def test_any_beam_convention_and_mounting(first_beam_angle, direction):
     pose = [0.3, 0.4, 0.5]
-    ranges, params = scan(ROOM, pose, beams=180, first_beam_angle=first_beam_angle, direction=direction,
-                          mount_x=0.05)
+    ranges, params = scan(ROOM, pose, beams=180, first_beam_angle=first_beam_angle, direction=direction, mount_x=0.05)
     features = CornerExtractor(params.geometry, 180).extract(ranges)
     truth = in_robot_frame(pose, ROOM_CORNERS)  # robot frame: the mounting offset is taken out
     assert len(features.observations) == 4

@@ -6,8 +6,17 @@ import pytest
 
 from mazeslam.filters.fastslam import FastSLAM, FastSLAMParams
 
-EXACT = FastSLAMParams(NPARTICLES=1, sigmaX=0, sigmaTH=0, sigmaTH_drive=0, sigmaR=0.01, sigmaB=0.01,
-                       observation_scale=0.0, resample_threshold=0, inflation=1.0)
+EXACT = FastSLAMParams(
+    NPARTICLES=1,
+    sigmaX=0,
+    sigmaTH=0,
+    sigmaTH_drive=0,
+    sigmaR=0.01,
+    sigmaB=0.01,
+    observation_scale=0.0,
+    resample_threshold=0,
+    inflation=1.0,
+)
 
 
 def observe(pose, landmark):
@@ -155,8 +164,9 @@ def test_landmark_slots_grow_as_needed():
     assert len(slam.landmarks()[0]) == 5
 
 
-@pytest.mark.parametrize("kwargs", [{"NPARTICLES": 0}, {"sigmaX": -1}, {"gate": 20.0},
-                                    {"association": "nearest"}, {"resample_threshold": 2}])
+@pytest.mark.parametrize(
+    "kwargs", [{"NPARTICLES": 0}, {"sigmaX": -1}, {"gate": 20.0}, {"association": "nearest"}, {"resample_threshold": 2}]
+)
 def test_impossible_filter_parameters(kwargs):
     with pytest.raises(ValueError):
         FastSLAMParams(**kwargs)
@@ -166,8 +176,17 @@ def test_fastslam2_draws_poses_from_the_kalman_posterior_of_motion_and_observati
     # Robot believed at the origin with 5 cm of x-uncertainty from the motion; a landmark known to
     # 1 mm straight ahead at 0.3 m is seen at 0.27 m: the posterior along x is the 1-D Kalman
     # combination of the motion (5 cm) and the observation (1 cm range noise plus the landmark).
-    params = FastSLAMParams(NPARTICLES=4000, sigmaR=0.01, sigmaB=0.01, observation_scale=0.0, inflation=1.0,
-                            resample_threshold=0, version=2, view_range=0.0, seed=1)
+    params = FastSLAMParams(
+        NPARTICLES=4000,
+        sigmaR=0.01,
+        sigmaB=0.01,
+        observation_scale=0.0,
+        inflation=1.0,
+        resample_threshold=0,
+        version=2,
+        view_range=0.0,
+        seed=1,
+    )
     slam = FastSLAM(params)
     slam.exists[:, 0] = True
     slam.means[:, 0] = (0.3, 0.0)
@@ -186,8 +205,10 @@ def test_fastslam2_draws_poses_from_the_kalman_posterior_of_motion_and_observati
 def test_fastslam2_keeps_more_particles_alive(default_run):
     from mazeslam.slam import SlamConfig, slam_on_file
 
-    runs = {v: slam_on_file(default_run.log_path, SlamConfig(fastslam=FastSLAMParams(version=v)), progress=False)
-            for v in (1, 2)}
+    runs = {
+        v: slam_on_file(default_run.log_path, SlamConfig(fastslam=FastSLAMParams(version=v)), progress=False)
+        for v in (1, 2)
+    }
     assert runs[2].resamplings < 0.6 * runs[1].resamplings
 
 

@@ -14,8 +14,9 @@ from mazeslam.filters.resampling import effective_sample_size, normalized_weight
 
 def test_ekf_update_of_a_scalar_is_the_weighted_average():
     # Prior N(1, 4), measurement 3 with variance 1 of the state itself: posterior mean 1 + 4/5 * 2, variance 4/5.
-    mean, covariance, s = ekf.update(np.array([[1.0]]), np.array([[[4.0]]]), np.array([[2.0]]),
-                                     np.array([[[1.0]]]), np.array([[1.0]]))
+    mean, covariance, s = ekf.update(
+        np.array([[1.0]]), np.array([[[4.0]]]), np.array([[2.0]]), np.array([[[1.0]]]), np.array([[1.0]])
+    )
     assert mean[0, 0] == pytest.approx(2.6)
     assert covariance[0, 0, 0] == pytest.approx(0.8)
     assert s[0, 0, 0] == pytest.approx(5.0)
@@ -78,8 +79,15 @@ def test_the_observation_proposal_draws_from_the_corrected_motion_gaussian():
     landmark = np.array([1.0, 0.0])
     observation = np.array([[1.0, 0.0]])  # seen 1 m straight ahead: the robot is at the origin
     drawn, carried, (distance2, _) = ObservationProposal().draw(
-        poses, covariances, np.zeros((count, 1), dtype=int), observation, np.tile(landmark, (count, 1, 1)),
-        np.zeros((count, 1, 2, 2)), np.array([np.diag([1e-4, 1e-4])]), np.random.default_rng(5))
+        poses,
+        covariances,
+        np.zeros((count, 1), dtype=int),
+        observation,
+        np.tile(landmark, (count, 1, 1)),
+        np.zeros((count, 1, 2, 2)),
+        np.array([np.diag([1e-4, 1e-4])]),
+        np.random.default_rng(5),
+    )
     # Along x: prior variance 0.01, measurement variance 1e-4 -> posterior mean 0.05 * 1e-4 / 0.0101.
     assert drawn[:, 0].mean() == pytest.approx(0.05 * 1e-4 / 0.0101, abs=2e-4)
     assert drawn[:, 0].std() == pytest.approx(math.sqrt(0.01 * 1e-4 / 0.0101), rel=0.05)
@@ -96,8 +104,15 @@ def test_the_observation_proposal_weighs_by_the_joint_likelihood_of_the_scan():
     observations = np.array([[1.01, 0.13], [0.86, 1.93]])
     noise = np.array([np.diag([1e-4, 4e-4]), np.diag([2e-4, 1e-4])])
     _, _, (distance2, determinant) = ObservationProposal().draw(
-        pose, spread, np.array([[0, 1]]), observations, landmarks, np.zeros((1, 2, 2, 2)), noise,
-        np.random.default_rng(0))
+        pose,
+        spread,
+        np.array([[0, 1]]),
+        observations,
+        landmarks,
+        np.zeros((1, 2, 2, 2)),
+        noise,
+        np.random.default_rng(0),
+    )
     sequential = -0.5 * (distance2 + np.log(determinant)).sum()
     z_hat, _, h_pose = ekf.range_bearing(np.repeat(pose, 2, axis=0), landmarks[0])
     g = h_pose.reshape(4, 3)
@@ -107,18 +122,23 @@ def test_the_observation_proposal_weighs_by_the_joint_likelihood_of_the_scan():
     # Equal up to the linearisation at the corrected pose (second order in the small corrections).
     assert sequential == pytest.approx(joint, abs=0.05)
     blocks = [slice(2 * k, 2 * k + 2) for k in range(2)]
-    marginals = -0.5 * sum(residual[b] @ np.linalg.solve(joint_covariance[b, b], residual[b])
-                           + np.log(np.linalg.det(joint_covariance[b, b])) for b in blocks)
+    marginals = -0.5 * sum(
+        residual[b] @ np.linalg.solve(joint_covariance[b, b], residual[b])
+        + np.log(np.linalg.det(joint_covariance[b, b]))
+        for b in blocks
+    )
     assert abs(marginals - joint) > 10 * abs(sequential - joint)
 
 
 def test_the_motion_proposal_draws_when_moving_and_carries_nothing():
     poses, covariances = np.zeros((2000, 3)), np.zeros((2000, 3, 3))
-    moved, carried = MotionProposal().predict(poses, covariances, 0.25, 0.0, OdometryNoise(0.02, 0.0, 0.0),
-                                              np.random.default_rng(1))
+    moved, carried = MotionProposal().predict(
+        poses, covariances, 0.25, 0.0, OdometryNoise(0.02, 0.0, 0.0), np.random.default_rng(1)
+    )
     assert moved[:, 0].std() == pytest.approx(0.02 * 0.5, rel=0.05)
     np.testing.assert_array_equal(carried, 0.0)
-    means, spread = ObservationProposal().predict(poses, covariances, 0.25, 0.0, OdometryNoise(0.02, 0.0, 0.0),
-                                                  np.random.default_rng(1))
+    means, spread = ObservationProposal().predict(
+        poses, covariances, 0.25, 0.0, OdometryNoise(0.02, 0.0, 0.0), np.random.default_rng(1)
+    )
     np.testing.assert_allclose(means[:, 0], 0.25)
     assert spread[0, 0, 0] == pytest.approx(0.02**2 * 0.25)

@@ -25,13 +25,44 @@ from mazeslam.envs.simulator import SimulationConfig
 from mazeslam.imports.carmen import read_carmen
 from mazeslam.slam import SlamConfig
 
-FUZZ = settings(max_examples=150, deadline=None, derandomize=True,
-                suppress_health_check=[HealthCheck.too_slow, HealthCheck.function_scoped_fixture])
+FUZZ = settings(
+    max_examples=150,
+    deadline=None,
+    derandomize=True,
+    suppress_health_check=[HealthCheck.too_slow, HealthCheck.function_scoped_fixture],
+)
 
 #: Tokens a corrupted file holds: numbers out of range, non-numbers, odd spellings.
-WEIRD = ["nan", "-nan", "inf", "-inf", "1e308", "-1e308", "1e999", "0", "-0", "-1", "1.5", "2", "3",
-         "18446744073709551617", "0x10", "1_000", "", "abc", "NaN", "+inf", "1e-320", "é", "\x00", "#", "%",
-         ",", "1,2", "9" * 400]
+WEIRD = [
+    "nan",
+    "-nan",
+    "inf",
+    "-inf",
+    "1e308",
+    "-1e308",
+    "1e999",
+    "0",
+    "-0",
+    "-1",
+    "1.5",
+    "2",
+    "3",
+    "18446744073709551617",
+    "0x10",
+    "1_000",
+    "",
+    "abc",
+    "NaN",
+    "+inf",
+    "1e-320",
+    "é",
+    "\x00",
+    "#",
+    "%",
+    ",",
+    "1,2",
+    "9" * 400,
+]
 
 
 def _base_log(beams: int = 6, records: int = 24) -> str:
@@ -44,8 +75,9 @@ def _base_log(beams: int = 6, records: int = 24) -> str:
         elif k % 7 == 5:
             lines.append(f"{t:.6f} 2 {k % 4} 0.3 0.5 " + " ".join(["-1"] * (beams - 3)))
         else:
-            lines.append(f"{t:.6f} 0 {rng.uniform(0, 0.01):.6f} {rng.uniform(-0.1, 0.1):.6f} "
-                         + " ".join(["-1"] * (beams - 2)))
+            lines.append(
+                f"{t:.6f} 0 {rng.uniform(0, 0.01):.6f} {rng.uniform(-0.1, 0.1):.6f} " + " ".join(["-1"] * (beams - 2))
+            )
     return "\n".join(lines) + "\n"
 
 
@@ -71,10 +103,16 @@ def _parse_or_refuse(text: str, strict: bool) -> None:
 
 
 @FUZZ
-@given(lines=st.lists(st.lists(st.one_of(st.sampled_from(WEIRD), st.floats(), st.integers().map(str)),
-                               min_size=0, max_size=9).map(lambda parts: " ".join(map(str, parts))),
-                      min_size=0, max_size=12),
-       strict=st.booleans())
+@given(
+    lines=st.lists(
+        st.lists(st.one_of(st.sampled_from(WEIRD), st.floats(), st.integers().map(str)), min_size=0, max_size=9).map(
+            lambda parts: " ".join(map(str, parts))
+        ),
+        min_size=0,
+        max_size=12,
+    ),
+    strict=st.booleans(),
+)
 def test_log_reader_reads_or_refuses_any_lines(lines, strict):
     _parse_or_refuse("\n".join(lines), strict)
 
@@ -103,9 +141,16 @@ CARMEN_TOKENS = st.sampled_from(["FLASER", "ODOM", "PARAM", "NEFF", "robot_front
 
 
 @FUZZ
-@given(lines=st.lists(st.lists(st.one_of(CARMEN_TOKENS, st.floats().map(str), st.integers(-5, 400).map(str)),
-                               max_size=14).map(" ".join), max_size=10),
-       gzipped=st.booleans(), cut=st.integers(0, 40))
+@given(
+    lines=st.lists(
+        st.lists(st.one_of(CARMEN_TOKENS, st.floats().map(str), st.integers(-5, 400).map(str)), max_size=14).map(
+            " ".join
+        ),
+        max_size=10,
+    ),
+    gzipped=st.booleans(),
+    cut=st.integers(0, 40),
+)
 def test_carmen_reader_reads_or_refuses(tmp_path_factory, lines, gzipped, cut):
     data = ("\n".join(lines) + "\n").encode("utf-8", errors="surrogatepass")
     if gzipped:
@@ -124,9 +169,11 @@ def test_carmen_reader_reads_or_refuses(tmp_path_factory, lines, gzipped, cut):
 
 SETTING_VALUES = st.recursive(
     st.one_of(st.none(), st.booleans(), st.integers(), st.floats(), st.text(max_size=8)),
-    lambda children: st.one_of(st.lists(children, max_size=3), st.dictionaries(st.text(max_size=6), children,
-                                                                                 max_size=3)),
-    max_leaves=6)
+    lambda children: st.one_of(
+        st.lists(children, max_size=3), st.dictionaries(st.text(max_size=6), children, max_size=3)
+    ),
+    max_leaves=6,
+)
 
 
 def _section_strategy(params) -> st.SearchStrategy:
@@ -147,10 +194,19 @@ def _assert_no_nan(mapping) -> None:
 
 
 @FUZZ
-@given(sections=st.fixed_dictionaries({}, optional={
-    "fastslam": _section_strategy(SlamConfig().fastslam), "corners": _section_strategy(SlamConfig().corners),
-    "sensor": _section_strategy(SlamConfig().sensor), "scan_matching": _section_strategy(SlamConfig().scan_matching),
-    "evaluation": _section_strategy(SlamConfig().evaluation), "odometry": _section_strategy(SlamConfig().odometry)}))
+@given(
+    sections=st.fixed_dictionaries(
+        {},
+        optional={
+            "fastslam": _section_strategy(SlamConfig().fastslam),
+            "corners": _section_strategy(SlamConfig().corners),
+            "sensor": _section_strategy(SlamConfig().sensor),
+            "scan_matching": _section_strategy(SlamConfig().scan_matching),
+            "evaluation": _section_strategy(SlamConfig().evaluation),
+            "odometry": _section_strategy(SlamConfig().odometry),
+        },
+    )
+)
 def test_config_loader_accepts_or_refuses_any_values(sections):
     try:
         config = from_mapping(SlamConfig, sections, "fuzz.toml")
@@ -160,9 +216,15 @@ def test_config_loader_accepts_or_refuses_any_values(sections):
 
 
 @FUZZ
-@given(sections=st.fixed_dictionaries({}, optional={
-    name: _section_strategy(getattr(SimulationConfig(), name))
-    for name in ("robot", "laser", "odometry", "logger", "drive", "maze")}))
+@given(
+    sections=st.fixed_dictionaries(
+        {},
+        optional={
+            name: _section_strategy(getattr(SimulationConfig(), name))
+            for name in ("robot", "laser", "odometry", "logger", "drive", "maze")
+        },
+    )
+)
 def test_simulation_config_loader_accepts_or_refuses_any_values(sections):
     try:
         config = from_mapping(SimulationConfig, sections, "fuzz.toml")
@@ -214,8 +276,11 @@ def test_mutated_log_corpus(tmp_path):
         text = mutate_text(BASE_LOG, rng)
         data = text.encode()
         if rng.random() < 0.05:  # binary garbage or a gzip stream, whole or cut
-            data = bytes(rng.integers(0, 256, 40, dtype=np.uint8)) + data if rng.random() < 0.5 else \
-                gzip.compress(data)[: int(rng.integers(10, 200))]
+            data = (
+                bytes(rng.integers(0, 256, 40, dtype=np.uint8)) + data
+                if rng.random() < 0.5
+                else gzip.compress(data)[: int(rng.integers(10, 200))]
+            )
         path = tmp_path / f"m{k}.log"
         path.write_bytes(data)
         for strict in (True, False):
@@ -236,21 +301,52 @@ def test_mutated_log_corpus(tmp_path):
 
 CONFIG_CORPUS = 150
 CONFIGS = {
-    "fastslam": ("[fastslam]\nNPARTICLES = 100\nsigmaX = 0.002\nsigmaTH = 0.012\nseed = 0\nversion = 2\n"
-                 "association = \"unknown\"\ninflation = 2.0\n[corners]\nmin_range = 0.02\nmax_range = 0.5\n"
-                 "mode = \"corners\"\ncovariance_scale = {corner = 0.85, wall_end = 5.5}\n[corners.lines]\n"
-                 "min_points = 5\nsplit_threshold = 0.012\n[sensor]\nfirst_beam_angle = -3.14\nmount_x = 0.0\n"
-                 "[scan_matching]\nenabled = false\ncorrespondence_distances = [1.0, 0.5]\n"
-                 "[scan_matching.correlative]\nturn_step = 3.0\n[evaluation]\nmatch_radius = 0.05\n"
-                 "[odometry]\njump_tolerance = inf\n", SlamConfig),
-    "simulation": ("max_duration = 600.0\n[laser]\nbeams = 90\nmax_range = 0.8\ndropout = 0.0\n"
-                   "[laser.geometry]\nfirst_beam_angle = 0.0\ndirection = 1\n[maze]\nrows = 3\ncols = 3\n"
-                   "[logger]\nscan_period = 0.75\nodometry_rate = 5.0\n[robot]\nmass = 0.2\n", SimulationConfig),
+    "fastslam": (
+        "[fastslam]\nNPARTICLES = 100\nsigmaX = 0.002\nsigmaTH = 0.012\nseed = 0\nversion = 2\n"
+        'association = "unknown"\ninflation = 2.0\n[corners]\nmin_range = 0.02\nmax_range = 0.5\n'
+        'mode = "corners"\ncovariance_scale = {corner = 0.85, wall_end = 5.5}\n[corners.lines]\n'
+        "min_points = 5\nsplit_threshold = 0.012\n[sensor]\nfirst_beam_angle = -3.14\nmount_x = 0.0\n"
+        "[scan_matching]\nenabled = false\ncorrespondence_distances = [1.0, 0.5]\n"
+        "[scan_matching.correlative]\nturn_step = 3.0\n[evaluation]\nmatch_radius = 0.05\n"
+        "[odometry]\njump_tolerance = inf\n",
+        SlamConfig,
+    ),
+    "simulation": (
+        "max_duration = 600.0\n[laser]\nbeams = 90\nmax_range = 0.8\ndropout = 0.0\n"
+        "[laser.geometry]\nfirst_beam_angle = 0.0\ndirection = 1\n[maze]\nrows = 3\ncols = 3\n"
+        "[logger]\nscan_period = 0.75\nodometry_rate = 5.0\n[robot]\nmass = 0.2\n",
+        SimulationConfig,
+    ),
 }
-CONFIG_WEIRD = ["true", "false", '"yes"', "nan", "inf", "-inf", "1e300", "-1e300", "1180591620717411303424", "-1",
-                "0", "1.5", "[]", "{}", '"x"', "1000000000", "[nan]", "{corner = true}", '"\\u0000"',
-                # plausible values too, so that some mutants load and run
-                "0.5", "0.05", "3", "10", "1", "0.01", "2"]
+CONFIG_WEIRD = [
+    "true",
+    "false",
+    '"yes"',
+    "nan",
+    "inf",
+    "-inf",
+    "1e300",
+    "-1e300",
+    "1180591620717411303424",
+    "-1",
+    "0",
+    "1.5",
+    "[]",
+    "{}",
+    '"x"',
+    "1000000000",
+    "[nan]",
+    "{corner = true}",
+    '"\\u0000"',
+    # plausible values too, so that some mutants load and run
+    "0.5",
+    "0.05",
+    "3",
+    "10",
+    "1",
+    "0.01",
+    "2",
+]
 
 
 def test_mutated_config_corpus(tmp_path):
@@ -277,12 +373,14 @@ def test_mutated_config_corpus(tmp_path):
         loaded += 1
         _assert_no_nan(to_mapping(config))
         if k % 10 == 0:  # the command line too
-            command = ["simulate", "--out", str(tmp_path / "x" / f"{k}.log"), "--duration", "0.5", "--quiet"] \
-                if cls is SimulationConfig else ["info", str(tmp_path / "absent.log")]
+            command = (
+                ["simulate", "--out", str(tmp_path / "x" / f"{k}.log"), "--duration", "0.5", "--quiet"]
+                if cls is SimulationConfig
+                else ["info", str(tmp_path / "absent.log")]
+            )
             result = CliRunner().invoke(main, [*command, "--config", str(path)] if cls is SimulationConfig else command)
             if result.exception is not None and not isinstance(result.exception, SystemExit):
-                assert isinstance(result.exception, KNOWN_ERRORS), "".join(
-                    traceback.format_exception(result.exception))
+                assert isinstance(result.exception, KNOWN_ERRORS), "".join(traceback.format_exception(result.exception))
     assert loaded > 0
 
 

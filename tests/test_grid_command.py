@@ -20,8 +20,13 @@ def building(tmp_path_factory):
     folder = tmp_path_factory.mktemp("building")
     simulated = simulate_building_log(folder / "building.log")
     sidecars.write_truth(sidecars.truth_path(simulated.path), log.read(simulated.path).times, simulated.truth)
-    sidecars.write_map(sidecars.map_path(simulated.path), np.empty((0, 4)), np.empty((0, 2)),
-                       simulated.geometry.to_dict(), start_pose=simulated.start_pose.tolist())
+    sidecars.write_map(
+        sidecars.map_path(simulated.path),
+        np.empty((0, 4)),
+        np.empty((0, 2)),
+        simulated.geometry.to_dict(),
+        start_pose=simulated.start_pose.tolist(),
+    )
     config = folder / "grid.toml"
     config.write_text('[map]\nkind = "grid"\n\n[grid]\nparticles = 8\nmotion = "wheels"\n')
     return simulated, config
@@ -30,8 +35,9 @@ def building(tmp_path_factory):
 def test_the_grid_command_writes_a_map_server_map_and_closes_the_loop(building, tmp_path):
     simulated, config = building
     out = tmp_path / "out"
-    result = CliRunner().invoke(main, ["slam", str(simulated.path), "--config", str(config), "--out", str(out),
-                                       "--quiet"])
+    result = CliRunner().invoke(
+        main, ["slam", str(simulated.path), "--config", str(config), "--out", str(out), "--quiet"]
+    )
     assert result.exit_code == 0, result.output
     occupancy = read_map(out / "occupancy.yaml")
     assert (occupancy.states == OCCUPIED).sum() > 500 and occupancy.resolution > 0

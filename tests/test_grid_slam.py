@@ -63,8 +63,11 @@ def test_the_trajectory_has_a_row_per_record(building):
 
 def test_the_settings_load_from_a_toml_section_and_the_wheels_give_the_motion(building):
     simulated, course_log, _ = building
-    params = from_mapping(GridSlamParams, {"particles": 5, "motion": "wheels", "grid": {"resolution": 0.1},
-                                           "laser_odometry": {"enabled": True}}, "[grid]")
+    params = from_mapping(
+        GridSlamParams,
+        {"particles": 5, "motion": "wheels", "grid": {"resolution": 0.1}, "laser_odometry": {"enabled": True}},
+        "[grid]",
+    )
     assert params.grid.resolution == 0.1 and params.laser_odometry.enabled
     motions = scan_motions(course_log, simulated.geometry, params)
     chained = dead_reckoning(course_log, simulated.start_pose)[np.flatnonzero(course_log.is_scan)]

@@ -37,8 +37,14 @@ def test_max_episode_steps_is_the_one_limit():
 
 def run_example(name, *args, cwd):
     environment = {**os.environ, "MPLBACKEND": "Agg"}
-    return subprocess.run([sys.executable, str(PROJECT_ROOT / "examples" / name), *args], capture_output=True,
-                          text=True, cwd=cwd, env=environment, timeout=300)
+    return subprocess.run(
+        [sys.executable, str(PROJECT_ROOT / "examples" / name), *args],
+        capture_output=True,
+        text=True,
+        cwd=cwd,
+        env=environment,
+        timeout=300,
+    )
 
 
 @pytest.mark.parametrize("name", ["random_agent.py", "frontier_agent.py"])
@@ -57,8 +63,9 @@ def test_example_video_with_moviepy(tmp_path):
 
 
 def test_vector_env_truncates_at_max_episode_steps():
-    envs = gym.make_vec("mazeslam/Maze-v0", num_envs=2, vectorization_mode="vector_entry_point", rows=2, cols=2,
-                        max_episode_steps=3)
+    envs = gym.make_vec(
+        "mazeslam/Maze-v0", num_envs=2, vectorization_mode="vector_entry_point", rows=2, cols=2, max_episode_steps=3
+    )
     assert envs.unwrapped.max_steps == 3
     envs.close()
     envs = gym.make_vec("mazeslam/Maze-v0", num_envs=2, vectorization_mode="vector_entry_point", rows=2, cols=2)

@@ -12,8 +12,9 @@ HEAVY = ("pymunk", "matplotlib", "pandas", "cv2", "scipy.spatial")
 
 def run_python(code: str) -> str:
     """Run ``code`` in a fresh interpreter (nothing imported yet) and return what it printed."""
-    return subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True,
-                          cwd=PROJECT_ROOT).stdout
+    return subprocess.run(
+        [sys.executable, "-c", code], capture_output=True, text=True, check=True, cwd=PROJECT_ROOT
+    ).stdout
 
 
 def test_importing_mazeslam_and_its_log_reader_loads_nothing_heavy():
@@ -26,7 +27,8 @@ def test_the_simulator_and_the_environment_are_there_on_first_use():
         "import gymnasium, mazeslam\n"
         "env = gymnasium.make('mazeslam/Maze-v0')\n"
         "observation, info = env.reset(seed=0)\n"
-        "print(observation['scan'].shape, mazeslam.simulate.__module__, mazeslam.SimulationConfig().laser.beams)\n")
+        "print(observation['scan'].shape, mazeslam.simulate.__module__, mazeslam.SimulationConfig().laser.beams)\n"
+    )
     assert printed.split() == ["(180,)", "mazeslam.envs.simulator", "180"]
 
 

@@ -137,9 +137,11 @@ def test_landmark_records_round_trip(tmp_path):
 
 @pytest.mark.parametrize(
     "line, reason",
-    [("0.2 2 1.5 1.0 0.1", "landmark id 1.5 is not an integer"),
-     ("0.2 2 3 0 0.1", "landmark range 0 is not positive"),
-     ("0.2 2 3 1.0 0.1 7", None)],
+    [
+        ("0.2 2 1.5 1.0 0.1", "landmark id 1.5 is not an integer"),
+        ("0.2 2 3 0 0.1", "landmark range 0 is not positive"),
+        ("0.2 2 3 1.0 0.1 7", None),
+    ],
 )
 def test_bad_landmark_records(line, reason):
     width = len(line.split())

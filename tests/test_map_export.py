@@ -60,8 +60,10 @@ def test_known_walls_are_occupied_and_the_path_free(short_run, tmp_path):
             point = np.array([x1 + t * (x2 - x1), y1 + t * (y2 - y1)])
             if np.hypot(*(hits - point).T).min() > 0.002:
                 continue
-            around = [pixel(description, image, *(point + offset)) for offset in 0.01 * np.array(
-                [[0, 0], [1, 0], [-1, 0], [0, 1], [0, -1]])]
+            around = [
+                pixel(description, image, *(point + offset))
+                for offset in 0.01 * np.array([[0, 0], [1, 0], [-1, 0], [0, 1], [0, -1]])
+            ]
             assert 0 in around, point
             checked += 1
     assert checked > 20
@@ -90,7 +92,6 @@ def test_slam_writes_the_map_files(short_run, tmp_path):
         assert (out / name).stat().st_size > 0, name
     rows = (out / "landmarks.csv").read_text().splitlines()
     assert rows[0] == "x,y,cov_xx,cov_xy,cov_yy"
-
 
     landmarks = json.loads((out / "map.json").read_text())["landmarks"]
     assert len(rows) - 1 == len(landmarks)

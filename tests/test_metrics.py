@@ -99,17 +99,22 @@ def test_agrees_with_evo_on_the_same_trajectories():
     ape = evo_metrics.APE(evo_metrics.PoseRelation.translation_part)
     ape.process_data((reference, estimated))
     assert absolute_trajectory_error(estimate, truth)["rmse"] == pytest.approx(
-        ape.get_statistic(evo_metrics.StatisticsType.rmse), rel=1e-9)
+        ape.get_statistic(evo_metrics.StatisticsType.rmse), rel=1e-9
+    )
     aligned = to_evo(estimate)
     aligned.align(reference, correct_scale=False)
     ape.process_data((reference, aligned))
     assert absolute_trajectory_error(estimate, truth, align=True)["rmse"] == pytest.approx(
-        ape.get_statistic(evo_metrics.StatisticsType.rmse), rel=1e-6)
+        ape.get_statistic(evo_metrics.StatisticsType.rmse), rel=1e-6
+    )
     for delta, unit, evo_unit in ((0.2, "m", evo_metrics.Unit.meters), (25, "records", evo_metrics.Unit.frames)):
-        for relation, key in ((evo_metrics.PoseRelation.translation_part, "trans_rmse"),
-                              (evo_metrics.PoseRelation.rotation_angle_rad, "rot_rmse")):
-            rpe = evo_metrics.RPE(relation, delta=delta, delta_unit=evo_unit, all_pairs=False,
-                                  pairs_from_reference=True)  # ours cuts the true path into stretches
+        for relation, key in (
+            (evo_metrics.PoseRelation.translation_part, "trans_rmse"),
+            (evo_metrics.PoseRelation.rotation_angle_rad, "rot_rmse"),
+        ):
+            rpe = evo_metrics.RPE(
+                relation, delta=delta, delta_unit=evo_unit, all_pairs=False, pairs_from_reference=True
+            )  # ours cuts the true path into stretches
             rpe.process_data((reference, estimated))
             ours = relative_pose_error(estimate, truth, delta, unit)[key]
             assert ours == pytest.approx(rpe.get_statistic(evo_metrics.StatisticsType.rmse), rel=1e-6), (unit, key)

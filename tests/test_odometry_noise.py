@@ -17,8 +17,9 @@ from mazeslam.evaluation.odometry_noise import measure_odometry_noise
 
 def run_with_slip(tmp_path, slip_std):
     config = SimulationConfig()
-    config = dataclasses.replace(config, odometry=OdometryParams(slip_std=slip_std),
-                                 maze=dataclasses.replace(config.maze, rows=8, cols=8))
+    config = dataclasses.replace(
+        config, odometry=OdometryParams(slip_std=slip_std), maze=dataclasses.replace(config.maze, rows=8, cols=8)
+    )
     return simulate(tmp_path / "run.log", config, seed=3, progress=False)
 
 
@@ -50,8 +51,11 @@ def test_bad_input_is_named(default_run):
     course_log = log.read(default_run.log_path)
     with pytest.raises(ValueError, match="one pose"):
         measure_odometry_noise(course_log, np.zeros((3, 3)))
-    odometry_only = log.CourseLog(course_log.times[~course_log.is_scan], course_log.flags[~course_log.is_scan],
-                                  course_log.values[~course_log.is_scan])
+    odometry_only = log.CourseLog(
+        course_log.times[~course_log.is_scan],
+        course_log.flags[~course_log.is_scan],
+        course_log.values[~course_log.is_scan],
+    )
     with pytest.raises(ValueError, match="at least two observations"):
         measure_odometry_noise(odometry_only, np.zeros((len(odometry_only), 3)))
 

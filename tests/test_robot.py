@@ -99,8 +99,9 @@ def test_otsu_threshold_and_lookup_table_agree_with_the_fixed_model():
     fixed = image_to_ranges(frame, CALIBRATION, EXERCISE_CONVENTION, 90)
     otsu = image_to_ranges(frame, CameraCalibration(160, 160, 40, 150, threshold="otsu"), EXERCISE_CONVENTION, 90)
     radii = np.linspace(30, 160, 200)
-    table = CameraCalibration(160, 160, 40, 150, table_radii=tuple(radii),
-                              table_distances=tuple(CALIBRATION.distance(radii)))
+    table = CameraCalibration(
+        160, 160, 40, 150, table_radii=tuple(radii), table_distances=tuple(CALIBRATION.distance(radii))
+    )
     looked_up = image_to_ranges(frame, table, EXERCISE_CONVENTION, 90)
     seen = fixed > 0
     np.testing.assert_allclose(looked_up[seen], fixed[seen], rtol=0.01)
@@ -133,8 +134,16 @@ def recording_setup(tmp_path):
     camera = OmniCamera(RenderedCamera(robot, CALIBRATION, 320), CALIBRATION, EXERCISE_CONVENTION, 90)
     epuck = EPuck(emulator.port, scanner=camera, timeout=0.2)
     # The emulated robot moves only when spoken to: let the recorder's waits run its clock.
-    recorder = Recorder(epuck, tmp_path / "real.log", 90, EXERCISE_CONVENTION, scan_period=0.5, odometry_rate=5.0,
-                        clock=lambda: robot.time, wait=lambda seconds: epuck.read_counts() if seconds > 0 else None)
+    recorder = Recorder(
+        epuck,
+        tmp_path / "real.log",
+        90,
+        EXERCISE_CONVENTION,
+        scan_period=0.5,
+        odometry_rate=5.0,
+        clock=lambda: robot.time,
+        wait=lambda seconds: epuck.read_counts() if seconds > 0 else None,
+    )
     return robot, emulator, recorder
 
 
@@ -173,9 +182,21 @@ def test_record_command_on_the_simulator(tmp_path):
 
     script = tmp_path / "drive.txt"
     script.write_text("2 0.04 0\n1 0 0.8\n")
-    result = CliRunner().invoke(main, ["record", "--sim", "--out", str(tmp_path / "sim.log"), "--script", str(script),
-                                       "--maze", str(PROJECT_ROOT / "configs" / "mazes" / "paper_sheet.txt"),
-                                       "--beams", "120"])
+    result = CliRunner().invoke(
+        main,
+        [
+            "record",
+            "--sim",
+            "--out",
+            str(tmp_path / "sim.log"),
+            "--script",
+            str(script),
+            "--maze",
+            str(PROJECT_ROOT / "configs" / "mazes" / "paper_sheet.txt"),
+            "--beams",
+            "120",
+        ],
+    )
     assert result.exit_code == 0, result.output
     course_log = log.read(tmp_path / "sim.log")
     assert course_log.n_beams == 120 and course_log.duration == pytest.approx(2.8, abs=0.3)

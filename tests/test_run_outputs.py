@@ -64,8 +64,9 @@ def test_a_rerun_replaces_the_last_runs_files(short_log, tmp_path):
 def test_smooth_refuses_to_write_into_the_run_it_reads(short_log, tmp_path):
     run_dir = tmp_path / "run"
     assert invoke("slam", short_log, "--out", run_dir, "--quiet").exit_code == 0
-    result = CliRunner().invoke(main, ["smooth", str(short_log), "--association", "from-run", str(run_dir),
-                                       "--out", str(run_dir)])
+    result = CliRunner().invoke(
+        main, ["smooth", str(short_log), "--association", "from-run", str(run_dir), "--out", str(run_dir)]
+    )
     assert result.exit_code != 0
     assert "RUN_DIR" in result.output
     assert (run_dir / "map.json").is_file()

@@ -26,11 +26,21 @@ MAX_RANGE = 8.0
 
 #: A 12 x 8 m room with a partition and a pillar (walls x1, y1, x2, y2 in metres): no direction is
 #: unconstrained from anywhere inside it.
-ROOM = np.array([
-    [0, 0, 12, 0], [12, 0, 12, 8], [12, 8, 0, 8], [0, 8, 0, 0],
-    [5, 0, 5, 3], [5, 3, 7, 3],
-    [8, 5, 9, 5], [9, 5, 9, 6], [9, 6, 8, 6], [8, 6, 8, 5],
-], dtype=float)
+ROOM = np.array(
+    [
+        [0, 0, 12, 0],
+        [12, 0, 12, 8],
+        [12, 8, 0, 8],
+        [0, 8, 0, 0],
+        [5, 0, 5, 3],
+        [5, 3, 7, 3],
+        [8, 5, 9, 5],
+        [9, 5, 9, 6],
+        [9, 6, 8, 6],
+        [8, 6, 8, 5],
+    ],
+    dtype=float,
+)
 
 #: Two parallel walls 2 m apart and 100 m long: from inside, the laser cannot see how far along it.
 CORRIDOR = np.array([[-50, 0, 50, 0], [-50, 2, 50, 2]], dtype=float)
@@ -88,7 +98,14 @@ def test_corridor_leaves_the_along_track_motion_to_the_prior():
     params = ScanMatchParams()
     first, motion = np.array([0.0, 1.0, 0.0]), np.array([1.0, 0.05, 0.02])
     reference = ReferenceScan(scan_points(scan_from(first, CORRIDOR), FRONT_LASER, params), params)
-    points = scan_points(scan_from(compose(first, motion), CORRIDOR, ), FRONT_LASER, params)
+    points = scan_points(
+        scan_from(
+            compose(first, motion),
+            CORRIDOR,
+        ),
+        FRONT_LASER,
+        params,
+    )
     prior = np.array([1.3, 0.0, 0.0])
     match = match_scan(reference, points, prior, np.diag([0.05**2, 0.05**2, 0.05**2]), params)
     assert match.pose[0] == pytest.approx(1.3, abs=0.01)
@@ -157,10 +174,15 @@ def test_scans_without_returns_fall_back_on_the_odometry():
     assert result.increments[1] == pytest.approx(result.wheel_increments[1])
 
 
-@pytest.mark.parametrize("change, message", [
-    ({"point_noise": 0.0}, "point_noise"), ({"min_range": 5.0, "max_range": 2.0}, "min_range"),
-    ({"correspondence_distances": ()}, "correspondence_distances"), ({"min_overlap": 1.5}, "min_overlap"),
-])
+@pytest.mark.parametrize(
+    "change, message",
+    [
+        ({"point_noise": 0.0}, "point_noise"),
+        ({"min_range": 5.0, "max_range": 2.0}, "min_range"),
+        ({"correspondence_distances": ()}, "correspondence_distances"),
+        ({"min_overlap": 1.5}, "min_overlap"),
+    ],
+)
 def test_impossible_settings_are_refused(change, message):
     with pytest.raises(ValueError, match=message):
         ScanMatchParams(**change)
@@ -194,15 +216,23 @@ def test_mazeslam_slam_moves_by_laser_odometry_on_a_log_without_odometry(tmp_pat
     sensor = {"beams": BEAMS, "max_range": MAX_RANGE, **FRONT_LASER.to_dict()}
     sidecars.write_map(sidecars.map_path(path), ROOM, np.empty((0, 2)), sensor, start_pose=poses[0].tolist())
     config = tmp_path / "laser.toml"
-    config.write_text("[fastslam]\nsigmaX = 0.02\nsigmaTH = 0.01\nsigmaTH_drive = 0.005\nview_range = 3.0\n"
-                      "[scan_matching]\nenabled = true\n[scan_matching.correlative]\nturn_step = 2.0\n")
-    result = CliRunner().invoke(main, ["slam", str(path), "--config", str(config), "--out", str(tmp_path / "out"),
-                                       "--quiet"], catch_exceptions=False)
+    config.write_text(
+        "[fastslam]\nsigmaX = 0.02\nsigmaTH = 0.01\nsigmaTH_drive = 0.005\nview_range = 3.0\n"
+        "[scan_matching]\nenabled = true\n[scan_matching.correlative]\nturn_step = 2.0\n"
+    )
+    result = CliRunner().invoke(
+        main,
+        ["slam", str(path), "--config", str(config), "--out", str(tmp_path / "out"), "--quiet"],
+        catch_exceptions=False,
+    )
     assert result.exit_code == 0, result.output
     assert f"{len(poses) - 1} of {len(poses) - 1} scan-to-scan matches accepted" in result.output
     assert "at the scans (laser odometry" in result.output
-    table = dict(line.split("|")[1:3] for line in result.output.splitlines() if line.startswith("| FastSLAM")
-                 or line.startswith("| laser") or line.startswith("| dead"))
+    table = dict(
+        line.split("|")[1:3]
+        for line in result.output.splitlines()
+        if line.startswith("| FastSLAM") or line.startswith("| laser") or line.startswith("| dead")
+    )
     ate = {name.strip(): float(value) for name, value in table.items()}
     assert ate["dead reckoning"] > 5.0  # no odometry: dead reckoning stands at the start
     # Along the north wall the laser sees little across the room's length; one such step slides ~14 cm.

@@ -59,8 +59,18 @@ def test_other_beam_conventions_and_mounting_are_recorded_and_cast(tmp_path):
     result = simulate(tmp_path / "conv.log", config=config, seed=1, duration=30, progress=False)
     _, _, world = assert_scans_match_truth_and_map(result.log_path)
     assert world["sensor"]["direction"] == -1 and world["sensor"]["mount_x"] == 0.02
-    assert list(world["sensor"]) == ["beams", "max_range", "min_range", "range_noise_std", "dropout",
-                                     "first_beam_angle", "direction", "field_of_view", "mount_x", "mount_y"]
+    assert list(world["sensor"]) == [
+        "beams",
+        "max_range",
+        "min_range",
+        "range_noise_std",
+        "dropout",
+        "first_beam_angle",
+        "direction",
+        "field_of_view",
+        "mount_x",
+        "mount_y",
+    ]
 
 
 def test_same_seed_same_bytes_other_seed_other_run(tmp_path):
@@ -106,8 +116,14 @@ def test_record_rates_follow_the_logger_settings(default_run):
 def test_scripted_policy_drives_open_loop(tmp_path):
     config = dataclasses.replace(SimulationConfig(), odometry=OdometryParams(slip_std=0.0))
     policy = ScriptedPolicy([(2.0, 0.05, 0.0), (1.0, 0.0, 0.5)])
-    result = simulate(tmp_path / "s.log", config=config, maze=CONFIGS / "mazes" / "paper_sheet.txt",
-                      policy=policy, duration=4.0, progress=False)
+    result = simulate(
+        tmp_path / "s.log",
+        config=config,
+        maze=CONFIGS / "mazes" / "paper_sheet.txt",
+        policy=policy,
+        duration=4.0,
+        progress=False,
+    )
     start = result.maze.cell_center(0, 0)
     final = result.poses[-1]
     np.testing.assert_allclose(final[:2], start + [0.1, 0.0], atol=1e-3)
@@ -126,8 +142,7 @@ def test_load_commands(tmp_path):
 
 
 def test_maze_file_run(tmp_path):
-    result = simulate(tmp_path / "p.log", maze=CONFIGS / "mazes" / "large_8x8.txt", seed=0, duration=60,
-                      progress=False)
+    result = simulate(tmp_path / "p.log", maze=CONFIGS / "mazes" / "large_8x8.txt", seed=0, duration=60, progress=False)
     assert result.maze.rows == 8
     assert_scans_match_truth_and_map(result.log_path)
 

@@ -24,8 +24,9 @@ def errors(run_result, slam_result):
         "reckoning": absolute_trajectory_error(reckoned, truth)["rmse"],
         "reckoning_aligned": absolute_trajectory_error(reckoned, truth, align=True)["rmse"],
         "map": map_error(slam_result.landmarks, world["corners"]),
-        "map_aligned": map_error(apply_se2(align_se2(slam_result.mean_poses, truth), slam_result.landmarks),
-                                 world["corners"]),
+        "map_aligned": map_error(
+            apply_se2(align_se2(slam_result.mean_poses, truth), slam_result.landmarks), world["corners"]
+        ),
     }
 
 

@@ -26,8 +26,9 @@ def short_result(tmp_path_factory):
 def test_gif_has_one_frame_per_snapshot_and_the_scan(short_result, tmp_path):
     run, result, scan_at = short_result
     points = slam_report.scan_points_world(run.log, result.mean_poses, run.geometry)
-    path = slam_report.animate_slam(tmp_path / "slam.gif", result, points, run.truth, run.walls, scan_at=scan_at,
-                                    title="short.log", video=False)
+    path = slam_report.animate_slam(
+        tmp_path / "slam.gif", result, points, run.truth, run.walls, scan_at=scan_at, title="short.log", video=False
+    )
     assert path.suffix == ".gif"
     with Image.open(path) as image:
         assert image.n_frames == len(result.snapshots) > 3
@@ -39,8 +40,9 @@ def test_frames_have_labelled_axes_legend_and_time(short_result):
     from mazeslam.evaluation.slam_view import SlamView, view_extent
 
     run, result, scan_at = short_result
-    view = SlamView(result.times, result.mean_poses, view_extent(result.mean_poses), "short.log", run.truth,
-                    run.walls, scan_at)
+    view = SlamView(
+        result.times, result.mean_poses, view_extent(result.mean_poses), "short.log", run.truth, run.walls, scan_at
+    )
     index, particles, landmarks = result.snapshots[-1]
     view.show(index, particles, landmarks, result.landmark_covariances[: len(landmarks)])
     assert view.ax.get_xlabel() == "x [m]" and view.ax.get_ylabel() == "y [m]"

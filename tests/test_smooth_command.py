@@ -24,6 +24,7 @@ def invoke(*args):
 
 def strict_json(path):
     """The document at ``path``, refusing NaN and infinities (strict JSON)."""
+
     def refuse(constant):
         raise ValueError(f"{path}: {constant} is not strict JSON")
 
@@ -57,8 +58,9 @@ def test_slam_reports_the_optimum_and_smooth_takes_its_association(default_run, 
     line = next(line for line in result.output.splitlines() if line.startswith("Batch optimum (known association"))
     assert "FastSLAM/optimum ratio" in line
     filtered = {row["estimator"]: row for row in strict_json(tmp_path / "slam" / "map.json")["ate"]}
-    result = invoke("smooth", default_run.log_path, "--association", "from-run", tmp_path / "slam",
-                    "--out", tmp_path / "from_run")
+    result = invoke(
+        "smooth", default_run.log_path, "--association", "from-run", tmp_path / "slam", "--out", tmp_path / "from_run"
+    )
     assert result.exit_code == 0, result.output
     assert f"from the run {tmp_path / 'slam'}" in result.output
     document = strict_json(tmp_path / "from_run" / "map.json")
@@ -76,7 +78,8 @@ def test_optimum_columns_are_the_filters_ratio_at_its_scored_records(default_run
     columns = optimum_columns(run, SlamConfig(), score)
     assert columns["optimum_ratio"] == pytest.approx(score.ate() / columns["optimum_ate_rmse"])
     assert columns["optimum_aligned_ratio"] == pytest.approx(
-        score.ate(aligned=True) / columns["optimum_ate_aligned_rmse"])
+        score.ate(aligned=True) / columns["optimum_ate_aligned_rmse"]
+    )
     assert 0 < columns["optimum_ate_aligned_rmse"] <= columns["optimum_ate_rmse"]
     without_truth = load_run(_log_alone(default_run.log_path, run.path.parent / "elsewhere"))
     assert not has_known_optimum(without_truth)
@@ -90,8 +93,9 @@ def _log_alone(log_path, folder):
 
 def test_known_association_without_truth_is_an_error(default_run, tmp_path):
     log_path = _log_alone(default_run.log_path, tmp_path)
-    process = subprocess.run([sys.executable, "-m", "mazeslam.cli", "smooth", str(log_path)],
-                             capture_output=True, text=True, check=False)
+    process = subprocess.run(
+        [sys.executable, "-m", "mazeslam.cli", "smooth", str(log_path)], capture_output=True, text=True, check=False
+    )
     assert process.returncode == 2
     assert "--association known needs the truth and map sidecars" in process.stderr
     assert "use --association from-run RUN_DIR" in process.stderr
@@ -107,8 +111,16 @@ def test_run_dir_goes_with_from_run_only(default_run, args):
 def test_from_run_on_the_exercise_robot_log(course_log_path, tmp_path):
     options = ["--config", PROJECT_ROOT / "configs" / "course.toml", "--first-beam-angle", 0]
     assert invoke("slam", course_log_path, *options, "--out", tmp_path / "slam", "--quiet").exit_code == 0
-    result = invoke("smooth", course_log_path, *options, "--association", "from-run", tmp_path / "slam",
-                    "--out", tmp_path / "smooth")
+    result = invoke(
+        "smooth",
+        course_log_path,
+        *options,
+        "--association",
+        "from-run",
+        tmp_path / "slam",
+        "--out",
+        tmp_path / "smooth",
+    )
     assert result.exit_code == 0, result.output
     assert "no ground truth beside the log" in result.output
     document = strict_json(tmp_path / "smooth" / "map.json")

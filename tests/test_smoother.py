@@ -55,10 +55,13 @@ def test_range_bearing_jacobians_match_central_differences():
     observations = np.column_stack([rng.uniform(0.1, 1, 20), rng.uniform(-np.pi, np.pi, 20)])
     _, j_pose, j_landmark = range_bearing_residual(poses, landmarks, observations)
     np.testing.assert_allclose(
-        j_pose, central_difference(lambda p: range_bearing_residual(p, landmarks, observations)[0], poses), atol=1e-7)
+        j_pose, central_difference(lambda p: range_bearing_residual(p, landmarks, observations)[0], poses), atol=1e-7
+    )
     np.testing.assert_allclose(
-        j_landmark, central_difference(lambda m: range_bearing_residual(poses, m, observations)[0], landmarks),
-        atol=1e-7)
+        j_landmark,
+        central_difference(lambda m: range_bearing_residual(poses, m, observations)[0], landmarks),
+        atol=1e-7,
+    )
 
 
 def test_odometry_jacobians_match_central_differences():
@@ -75,10 +78,19 @@ def test_composed_odometry_is_the_path_and_its_covariance_the_record_by_record_r
     for distance, turn in INCREMENTS:  # Sigma <- F Sigma F^T + V Q V^T, as FastSLAM 2.0 carries it
         heading = pose[2] + 0.5 * turn
         f = np.array([[1, 0, -distance * np.sin(heading)], [0, 1, distance * np.cos(heading)], [0, 0, 1]])
-        v = np.array([[np.cos(heading), -0.5 * distance * np.sin(heading)],
-                      [np.sin(heading), 0.5 * distance * np.cos(heading)], [0, 1]])
-        q = np.diag([SIGMAS["sigma_x"] ** 2 * abs(distance),
-                     SIGMAS["sigma_th"] ** 2 * abs(turn) + SIGMAS["sigma_th_drive"] ** 2 * abs(distance)])
+        v = np.array(
+            [
+                [np.cos(heading), -0.5 * distance * np.sin(heading)],
+                [np.sin(heading), 0.5 * distance * np.cos(heading)],
+                [0, 1],
+            ]
+        )
+        q = np.diag(
+            [
+                SIGMAS["sigma_x"] ** 2 * abs(distance),
+                SIGMAS["sigma_th"] ** 2 * abs(turn) + SIGMAS["sigma_th_drive"] ** 2 * abs(distance),
+            ]
+        )
         expected = f @ expected @ f.T + v @ q @ v.T
         pose = advance_pose(pose, distance, turn)
     np.testing.assert_allclose(composed, pose, atol=1e-15)
@@ -96,8 +108,11 @@ def test_composed_covariance_matches_monte_carlo():
     for distance, turn in INCREMENTS:
         distance_std = SIGMAS["sigma_x"] * np.sqrt(abs(distance))
         turn_std = np.sqrt(SIGMAS["sigma_th"] ** 2 * abs(turn) + SIGMAS["sigma_th_drive"] ** 2 * abs(distance))
-        poses = advance_pose(poses, distance + distance_std * rng.standard_normal(samples),
-                             turn + turn_std * rng.standard_normal(samples))
+        poses = advance_pose(
+            poses,
+            distance + distance_std * rng.standard_normal(samples),
+            turn + turn_std * rng.standard_normal(samples),
+        )
     # Whitened by the predicted covariance, the draws have identity covariance and zero mean. With
     # 20000 draws the sampling error is sqrt(2/N) = 1 % on a variance, 0.7 % on a correlation, 0.7 %
     # of a std on the mean; the heading errors (~0.03 rad) bend the path by ~1e-3 relative, so the
@@ -145,8 +160,11 @@ def test_conflicting_ranges_are_reconciled_by_their_variances():
     params = FastSLAMParams(sigmaX=0.01, sigmaR=0.0, sigmaB=0.0)
     q = params.sigmaX**2 * 1.0
     covariances = [np.diag([v, 1e-4])[None] for v in (v1, v2)]
-    result = solve(build_problem(log, [np.array([[rho1, 0.0]]), np.array([[rho2, 0.0]])], covariances,
-                                 [np.array([7]), np.array([7])], params))
+    result = solve(
+        build_problem(
+            log, [np.array([[rho1, 0.0]]), np.array([[rho2, 0.0]])], covariances, [np.array([7]), np.array([7])], params
+        )
+    )
     c, total = rho1 - 1.0 - rho2, v1 + q + v2
     np.testing.assert_allclose(result.landmarks, [[rho1 - v1 * c / total, 0.0]], atol=1e-9)
     np.testing.assert_allclose(result.poses, [[0, 0, 0], [1.0 + q * c / total, 0, 0]], atol=1e-9)
@@ -166,8 +184,9 @@ def test_poses_at_every_record_follow_the_odometry_from_the_last_scan():
     scans = np.flatnonzero(log.is_scan)
     reckoned = dead_reckoning(log, start)
     no_observations = [np.empty((0, 2))] * 2
-    problem = build_problem(log, no_observations, [np.empty((0, 2, 2))] * 2, [np.empty(0, int)] * 2,
-                            FastSLAMParams(), start)
+    problem = build_problem(
+        log, no_observations, [np.empty((0, 2, 2))] * 2, [np.empty(0, int)] * 2, FastSLAMParams(), start
+    )
     result = solve(problem)
     np.testing.assert_allclose(expand_to_records(log, result, start), reckoned, atol=1e-12)  # nothing to correct
     result.poses = result.poses + [0.01, -0.02, 0.1]  # move the scan poses: the records after them follow
@@ -180,8 +199,7 @@ def test_poses_at_every_record_follow_the_odometry_from_the_last_scan():
 def test_smoother_beats_dead_reckoning_on_a_simulated_run(default_run):
     run = load_run(default_run.log_path)
     extractor = CornerExtractor(run.geometry, run.log.width)
-    result = smooth_known_association(run.log, extractor, truth_identities(run, 0.05), FastSLAMParams(),
-                                      run.start_pose)
+    result = smooth_known_association(run.log, extractor, truth_identities(run, 0.05), FastSLAMParams(), run.start_pose)
     truth = run.truth[result.scan_records]
     reckoned = dead_reckoning(run.log, run.start_pose)[result.scan_records]
     # Seeds 0, 404, 505, 606, 707, 808 measured 1.7-11 mm (0.59-0.91 mm aligned) against dead

@@ -17,8 +17,10 @@ TIMING = ["slam_seconds", "seconds_per_record"]
 
 def write_sweep(folder, seeds=(0, 1), particles=(5, 20), duration=12.0, extra=""):
     path = folder / "s.toml"
-    path.write_text(f'name = "t"\nseeds = {list(seeds)}\nduration = {duration}\n{extra}\n[grid]\n'
-                    f'"slam.fastslam.NPARTICLES" = {list(particles)}\n"sim.laser.beams" = [90]\n')
+    path.write_text(
+        f'name = "t"\nseeds = {list(seeds)}\nduration = {duration}\n{extra}\n[grid]\n'
+        f'"slam.fastslam.NPARTICLES" = {list(particles)}\n"sim.laser.beams" = [90]\n'
+    )
     return path
 
 
@@ -29,11 +31,14 @@ def test_grid_expands_over_every_combination_and_seed(tmp_path):
     assert {r["settings"]["slam.fastslam.NPARTICLES"] for r in runs} == {5, 20}
 
 
-@pytest.mark.parametrize("grid_line, message", [
-    ('"slam.fastslam.particles" = [5]', "no setting 'particles'"),
-    ('"filter.NPARTICLES" = [5]', "must start with 'sim.' or 'slam.'"),
-    ('"sim.laser.beams" = 90', "non-empty lists"),
-])
+@pytest.mark.parametrize(
+    "grid_line, message",
+    [
+        ('"slam.fastslam.particles" = [5]', "no setting 'particles'"),
+        ('"filter.NPARTICLES" = [5]', "must start with 'sim.' or 'slam.'"),
+        ('"sim.laser.beams" = 90', "non-empty lists"),
+    ],
+)
 def test_bad_sweep_files_are_refused(tmp_path, grid_line, message):
     path = tmp_path / "bad.toml"
     path.write_text(f"seeds = [0]\n[grid]\n{grid_line}\n")
@@ -95,8 +100,10 @@ def test_runs_on_a_dask_cluster_with_the_same_results(tmp_path):
 
 def test_linked_settings_move_together(tmp_path):
     path = tmp_path / "linked.toml"
-    path.write_text('seeds = [0]\nduration = 10.0\n[grid]\n'
-                    '"slam.fastslam.sigmaR+slam.fastslam.sigmaB" = [[0.002, 0.01], [0.02, 0.1]]\n')
+    path.write_text(
+        "seeds = [0]\nduration = 10.0\n[grid]\n"
+        '"slam.fastslam.sigmaR+slam.fastslam.sigmaB" = [[0.002, 0.01], [0.02, 0.1]]\n'
+    )
     sweep = load_sweep(path)
     from mazeslam.evaluation.sweep import configure
 

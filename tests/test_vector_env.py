@@ -27,8 +27,16 @@ def make(num_envs, **kwargs):
 def run(envs, seed, actions):
     """Observations, rewards, ends and poses of an episode stream under ``actions`` (T, E, 2)."""
     observation, info = envs.reset(seed=seed)
-    frames = [(observation["scan"], observation["odometry"], 0 * info["coverage"], info["pose"],
-               np.zeros(envs.num_envs, bool), np.zeros(envs.num_envs, bool))]
+    frames = [
+        (
+            observation["scan"],
+            observation["odometry"],
+            0 * info["coverage"],
+            info["pose"],
+            np.zeros(envs.num_envs, bool),
+            np.zeros(envs.num_envs, bool),
+        )
+    ]
     for action in actions:
         observation, reward, terminated, truncated, info = envs.step(action)
         frames.append((observation["scan"], observation["odometry"], reward, info["pose"], terminated, truncated))
@@ -78,7 +86,7 @@ def test_an_env_runs_the_same_alone_as_in_a_vector_across_autoresets():
     steps, size, chosen = 120, 5, 3
     actions = np.random.default_rng(1).uniform(-1, 1, (steps, size, 2))
     together = run(make(size, rows=2, cols=2, max_steps=25), 10, actions)
-    alone = run(make(1, rows=2, cols=2, max_steps=25), 10 + chosen, actions[:, chosen:chosen + 1])
+    alone = run(make(1, rows=2, cols=2, max_steps=25), 10 + chosen, actions[:, chosen : chosen + 1])
     assert together[4][:, chosen].any() or together[5][:, chosen].any()  # it went through an episode end
     for part_together, part_alone in zip(together, alone):
         np.testing.assert_array_equal(part_together[:, chosen], part_alone[:, 0])
@@ -140,7 +148,7 @@ def test_random_driving_never_enters_a_wall():
         action = rng.uniform(-1, 1, (16, 2)) * [1.0, 0.3] + [0.6, 0.0]  # mostly ahead: into walls
         _, reward, _, _, info = envs.step(action)
         collisions += info["collision"].sum()
-        closest = min(closest, min(distance_to_walls(info["pose"][k:k + 1, :2], boxes[k])[0] for k in range(16)))
+        closest = min(closest, min(distance_to_walls(info["pose"][k : k + 1, :2], boxes[k])[0] for k in range(16)))
     assert collisions > 100  # the robots did drive into walls
     assert closest >= radius - 1e-9
 
@@ -187,7 +195,7 @@ def test_rgb_array_rendering_tiles_the_chosen_envs():
     single.reset(seed=0)
     one = single.render()
     assert image.shape == (2 * one.shape[0], 2 * one.shape[1], 3) and image.dtype == np.uint8
-    np.testing.assert_array_equal(image[:one.shape[0], :one.shape[1]], one)
+    np.testing.assert_array_equal(image[: one.shape[0], : one.shape[1]], one)
 
 
 def test_course_logs_of_every_env_and_episode(tmp_path):
@@ -201,8 +209,12 @@ def test_course_logs_of_every_env_and_episode(tmp_path):
     for _ in range(20):  # through one autoreset
         envs.step(rng.uniform(-1, 1, (2, 2)) * [0.5, 1.0] + [0.5, 0.0])
     envs.close()
-    assert sorted(path.name for path in envs.log_paths) == ["env0-ep0.log", "env0-ep1.log", "env1-ep0.log",
-                                                            "env1-ep1.log"]
+    assert sorted(path.name for path in envs.log_paths) == [
+        "env0-ep0.log",
+        "env0-ep1.log",
+        "env1-ep0.log",
+        "env1-ep1.log",
+    ]
     for path in envs.log_paths:
         assert_scans_match_truth_and_map(path)
 
@@ -213,9 +225,19 @@ def frontier_agents(envs):
     from frontier_agent import FrontierAgent
 
     base = envs.unwrapped
-    return [FrontierAgent(SimpleNamespace(unwrapped=SimpleNamespace(
-        maze=maze, laser=SimpleNamespace(bearings=base.bearings), config=base.config,
-        top_turn_rate=base.top_turn_rate))) for maze in base.mazes]
+    return [
+        FrontierAgent(
+            SimpleNamespace(
+                unwrapped=SimpleNamespace(
+                    maze=maze,
+                    laser=SimpleNamespace(bearings=base.bearings),
+                    config=base.config,
+                    top_turn_rate=base.top_turn_rate,
+                )
+            )
+        )
+        for maze in base.mazes
+    ]
 
 
 def test_online_fastslam_on_every_env():

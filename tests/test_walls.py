@@ -15,8 +15,10 @@ def test_single_cell_is_a_square_room():
     maze = parse_maze("cell_size = 1\nwall_thickness = 0.1\n+---+\n|   |\n+---+\n")
     walls = wall_geometry(maze)
     assert as_set(walls.surfaces) == {
-        (0.05, 0.05, 0.05, 0.95), (0.95, 0.05, 0.95, 0.95),
-        (0.05, 0.05, 0.95, 0.05), (0.05, 0.95, 0.95, 0.95),
+        (0.05, 0.05, 0.05, 0.95),
+        (0.95, 0.05, 0.95, 0.95),
+        (0.05, 0.05, 0.95, 0.05),
+        (0.05, 0.95, 0.95, 0.95),
     }
     assert as_set(walls.corners) == {(0.05, 0.05), (0.95, 0.05), (0.05, 0.95), (0.95, 0.95)}
     assert not walls.corner_convex.any()  # all four are inside corners
@@ -28,17 +30,30 @@ def test_l_shaped_wall_hand_computed():
     maze = parse_maze("cell_size = 1\nwall_thickness = 0.1\n+---+---+\n|       |\n+   +---+\n|   |   |\n+---+---+\n")
     walls = wall_geometry(maze)
     assert as_set(walls.surfaces) == {
-        (0.05, 0.05, 0.05, 1.95), (0.05, 1.95, 1.95, 1.95), (1.95, 1.05, 1.95, 1.95),  # L's outer walls
-        (0.05, 0.05, 0.95, 0.05), (0.95, 0.05, 0.95, 1.05), (0.95, 1.05, 1.95, 1.05),  # L's inner side
-        (1.05, 0.05, 1.95, 0.05), (1.05, 0.05, 1.05, 0.95),  # the closed cell
-        (1.05, 0.95, 1.95, 0.95), (1.95, 0.05, 1.95, 0.95),
+        (0.05, 0.05, 0.05, 1.95),
+        (0.05, 1.95, 1.95, 1.95),
+        (1.95, 1.05, 1.95, 1.95),  # L's outer walls
+        (0.05, 0.05, 0.95, 0.05),
+        (0.95, 0.05, 0.95, 1.05),
+        (0.95, 1.05, 1.95, 1.05),  # L's inner side
+        (1.05, 0.05, 1.95, 0.05),
+        (1.05, 0.05, 1.05, 0.95),  # the closed cell
+        (1.05, 0.95, 1.95, 0.95),
+        (1.95, 0.05, 1.95, 0.95),
     }
     convex = {tuple(c) for c in np.round(walls.corners[walls.corner_convex], 9)}
     concave = {tuple(c) for c in np.round(walls.corners[~walls.corner_convex], 9)}
     assert convex == {(0.95, 1.05)}  # the tip of the L seen from the corridor
     assert concave == {
-        (0.05, 0.05), (0.95, 0.05), (0.05, 1.95), (1.95, 1.95), (1.95, 1.05),
-        (1.05, 0.05), (1.95, 0.05), (1.05, 0.95), (1.95, 0.95),
+        (0.05, 0.05),
+        (0.95, 0.05),
+        (0.05, 1.95),
+        (1.95, 1.95),
+        (1.95, 1.05),
+        (1.05, 0.05),
+        (1.95, 0.05),
+        (1.05, 0.95),
+        (1.95, 0.95),
     }
 
 

@@ -46,10 +46,16 @@ def predicted_covariances(poses: np.ndarray, increments: list, start: np.ndarray
         heading = pose[2] + 0.5 * turn
         f = np.eye(3)
         f[0, 2], f[1, 2] = -distance * np.sin(heading), distance * np.cos(heading)
-        v = np.array([[np.cos(heading), -0.5 * distance * np.sin(heading)],
-                      [np.sin(heading), 0.5 * distance * np.cos(heading)], [0.0, 1.0]])
-        q = params.inflation * np.diag([params.sigmaX**2 * abs(distance),
-                                        params.sigmaTH**2 * abs(turn) + params.sigmaTH_drive**2 * abs(distance)])
+        v = np.array(
+            [
+                [np.cos(heading), -0.5 * distance * np.sin(heading)],
+                [np.sin(heading), 0.5 * distance * np.cos(heading)],
+                [0.0, 1.0],
+            ]
+        )
+        q = params.inflation * np.diag(
+            [params.sigmaX**2 * abs(distance), params.sigmaTH**2 * abs(turn) + params.sigmaTH_drive**2 * abs(distance)]
+        )
         covariance = f @ covariance @ f.T + v @ q @ v.T
         pose = pose + [distance * np.cos(heading), distance * np.sin(heading), turn]
         out.append(covariance)
@@ -64,8 +70,14 @@ def main(noise_scale: float = 1.0):
     _, truth = sidecars.read_truth(run.truth_path)
     world = sidecars.read_map(run.map_path)
     base = FastSLAMParams()
-    params = FastSLAMParams(NPARTICLES=PARTICLES, seed=0, version=1, sigmaX=noise_scale * base.sigmaX,
-                            sigmaTH=noise_scale * base.sigmaTH, sigmaTH_drive=noise_scale * base.sigmaTH_drive)
+    params = FastSLAMParams(
+        NPARTICLES=PARTICLES,
+        seed=0,
+        version=1,
+        sigmaX=noise_scale * base.sigmaX,
+        sigmaTH=noise_scale * base.sigmaTH,
+        sigmaTH_drive=noise_scale * base.sigmaTH_drive,
+    )
     slam = FastSLAM(params, world["start_pose"])
     extractor = CornerExtractor(sidecars.beam_geometry(world["sensor"]), course_log.width)
     rows, snapshots, increments, blind_start = [], [], [], None
@@ -89,16 +101,29 @@ def main(noise_scale: float = 1.0):
             error = slam.mean_pose() - truth[record.index]
             error[2] = wrap_angle(error[2])
             spread_xy = np.sqrt(np.linalg.eigvalsh(covariance[:2, :2]))
-            rows.append({"t": record.t, "phase": phase, "travelled_blind_m": travelled,
-                         "std_major_m": spread_xy[1], "std_minor_m": spread_xy[0],
-                         "std_theta_deg": np.degrees(np.sqrt(covariance[2, 2])),
-                         "error_m": float(np.hypot(*error[:2])),
-                         "truth_mahalanobis_xy": float(np.sqrt(
-                             error[:2] @ np.linalg.solve(covariance[:2, :2] + 1e-18 * np.eye(2), error[:2]))),
-                         "ess": slam.effective_sample_size(), "resamplings": slam.resamplings,
-                         "increments": len(increments)})
-        if phase == "blind" and isinstance(record, log.OdometryRecord) and len(increments) % 40 == 1 or \
-                (phase == "after" and isinstance(record, log.ScanRecord) and record.t < BLIND_UNTIL + 3):
+            rows.append(
+                {
+                    "t": record.t,
+                    "phase": phase,
+                    "travelled_blind_m": travelled,
+                    "std_major_m": spread_xy[1],
+                    "std_minor_m": spread_xy[0],
+                    "std_theta_deg": np.degrees(np.sqrt(covariance[2, 2])),
+                    "error_m": float(np.hypot(*error[:2])),
+                    "truth_mahalanobis_xy": float(
+                        np.sqrt(error[:2] @ np.linalg.solve(covariance[:2, :2] + 1e-18 * np.eye(2), error[:2]))
+                    ),
+                    "ess": slam.effective_sample_size(),
+                    "resamplings": slam.resamplings,
+                    "increments": len(increments),
+                }
+            )
+        if (
+            phase == "blind"
+            and isinstance(record, log.OdometryRecord)
+            and len(increments) % 40 == 1
+            or (phase == "after" and isinstance(record, log.ScanRecord) and record.t < BLIND_UNTIL + 3)
+        ):
             snapshots.append((record.t, phase, slam.poses.copy(), truth[record.index].copy()))
     table = pd.DataFrame(rows)
     predicted = predicted_covariances(blind_start[1], increments, blind_start[2], params)
@@ -112,12 +137,14 @@ def main(noise_scale: float = 1.0):
     _plot_snapshots(snapshots, world["walls"], out / "clouds.png", noise_scale)
     after = table[table.phase == "after"].head(6)
     summary = {
-        "blind_seconds": BLIND_UNTIL - BLIND_FROM, "blind_distance_m": travelled,
+        "blind_seconds": BLIND_UNTIL - BLIND_FROM,
+        "blind_distance_m": travelled,
         "spread_at_end_of_blind": blind.iloc[-1][["std_major_m", "std_minor_m", "std_theta_deg"]].to_dict(),
         "predicted_at_end_of_blind": blind.iloc[-1][["predicted_std_major_m", "predicted_std_theta_deg"]].to_dict(),
         "error_at_end_of_blind_m": blind.iloc[-1]["error_m"],
-        "first_scans_after": after[["t", "std_major_m", "std_theta_deg", "ess", "resamplings", "error_m",
-                                    "truth_mahalanobis_xy"]].to_dict(orient="records"),
+        "first_scans_after": after[
+            ["t", "std_major_m", "std_theta_deg", "ess", "resamplings", "error_m", "truth_mahalanobis_xy"]
+        ].to_dict(orient="records"),
     }
     (out / "summary.json").write_text(json.dumps(summary, indent=1, default=float) + "\n")
     for name in ("run.log", "run.truth.csv", "run.map.json"):
@@ -141,8 +168,11 @@ def _plot_growth(blind: pd.DataFrame, path: Path, noise_scale: float) -> None:
     for ax in axes:
         ax.grid(alpha=0.3)
         ax.legend(fontsize=8)
-    fig.suptitle(f"Particle cloud without observations (FastSLAM 1.0, {PARTICLES} particles, "
-                 f"{noise_scale:g} x the default odometry noise), seed 0", fontsize=10)
+    fig.suptitle(
+        f"Particle cloud without observations (FastSLAM 1.0, {PARTICLES} particles, "
+        f"{noise_scale:g} x the default odometry noise), seed 0",
+        fontsize=10,
+    )
     fig.tight_layout()
     fig.savefig(path, dpi=110)
     plt.close(fig)
@@ -170,9 +200,11 @@ def _plot_snapshots(snapshots, walls, path: Path, noise_scale: float) -> None:
         ax.axis("off")
     handles, labels = axes.flat[0].get_legend_handles_labels()
     fig.legend(handles, labels, loc="lower center", ncol=2, fontsize=8)
-    fig.suptitle(f"The particle cloud while blind ({BLIND_FROM:g}-{BLIND_UNTIL:g} s) and when the scans return "
-                 f"(FastSLAM 1.0, {PARTICLES} particles, {noise_scale:g} x the default odometry noise; walls grey)",
-                 fontsize=10)
+    fig.suptitle(
+        f"The particle cloud while blind ({BLIND_FROM:g}-{BLIND_UNTIL:g} s) and when the scans return "
+        f"(FastSLAM 1.0, {PARTICLES} particles, {noise_scale:g} x the default odometry noise; walls grey)",
+        fontsize=10,
+    )
     fig.tight_layout(rect=(0, 0.04, 1, 0.95))
     fig.savefig(path, dpi=100)
     plt.close(fig)

@@ -30,12 +30,19 @@ def one_seed(seed: int) -> dict:
         run = load_run(simulate(Path(folder) / "run.log", seed=seed, progress=False).log_path)
     measured = calibrate(run, SlamConfig())
     motion, seen = measured.motion.noise, measured.observations
-    return {"seed": seed, "sigmaX": motion.sigmaX, "sigmaTH": motion.sigmaTH, "sigmaTH_drive": motion.sigmaTH_drive,
-            "sigmaR": seen.sigmaR, "sigmaB": seen.sigmaB,
-            **{f"{kind}_scale": scale for kind, scale in seen.kind_scales.items()},
-            **{f"{kind}_width": width for kind, width in seen.widths.items()},
-            **{f"{kind}_rho": rho for kind, rho in seen.correlations.items()},
-            "observations": seen.observations, "range_noise_std": measured.range_noise.std}
+    return {
+        "seed": seed,
+        "sigmaX": motion.sigmaX,
+        "sigmaTH": motion.sigmaTH,
+        "sigmaTH_drive": motion.sigmaTH_drive,
+        "sigmaR": seen.sigmaR,
+        "sigmaB": seen.sigmaB,
+        **{f"{kind}_scale": scale for kind, scale in seen.kind_scales.items()},
+        **{f"{kind}_width": width for kind, width in seen.widths.items()},
+        **{f"{kind}_rho": rho for kind, rho in seen.correlations.items()},
+        "observations": seen.observations,
+        "range_noise_std": measured.range_noise.std,
+    }
 
 
 def main() -> None:
@@ -44,12 +51,16 @@ def main() -> None:
     table.to_csv(HERE / "results.csv", index=False, float_format="%.6g")
     medians = table.drop(columns=["seed", "observations"]).median()
     simulator = SimulationConfig()
-    text = ("`mazeslam calibrate` against the truth of simulated default mazes, seeds "
-            f"{SEEDS[0]}-{SEEDS[-1]}: the median of each setting (the defaults in code and "
-            "configs/fastslam.toml). The simulator's laser noise is "
-            f"{simulator.laser.range_noise_std} m and its wheel slip {simulator.odometry.slip_std} m/sqrt(m).\n\n"
-            + medians.to_frame("median").to_markdown(floatfmt=".4g") + "\n\nPer seed:\n\n"
-            + table.to_markdown(index=False, floatfmt=".4g") + "\n")
+    text = (
+        "`mazeslam calibrate` against the truth of simulated default mazes, seeds "
+        f"{SEEDS[0]}-{SEEDS[-1]}: the median of each setting (the defaults in code and "
+        "configs/fastslam.toml). The simulator's laser noise is "
+        f"{simulator.laser.range_noise_std} m and its wheel slip {simulator.odometry.slip_std} m/sqrt(m).\n\n"
+        + medians.to_frame("median").to_markdown(floatfmt=".4g")
+        + "\n\nPer seed:\n\n"
+        + table.to_markdown(index=False, floatfmt=".4g")
+        + "\n"
+    )
     (HERE / "summary.md").write_text(text)
     print(text)
 

@@ -44,12 +44,15 @@ LOGS = ["aces", "csail", "edmonton", "fhw", "freiburg-079", "freiburg-101", "ore
 
 def ate(poses: np.ndarray, reference: np.ndarray) -> tuple[float, float]:
     """ATE RMSE (m) as estimated and after the best SE(2) alignment."""
-    return (absolute_trajectory_error(poses, reference)["rmse"],
-            absolute_trajectory_error(poses, reference, align=True)["rmse"])
+    return (
+        absolute_trajectory_error(poses, reference)["rmse"],
+        absolute_trajectory_error(poses, reference, align=True)["rmse"],
+    )
 
 
-def run_one(run: LoadedRun, config: SlamConfig, seed: int, laser: LaserOdometry, reference: np.ndarray,
-            scans: np.ndarray) -> dict:
+def run_one(
+    run: LoadedRun, config: SlamConfig, seed: int, laser: LaserOdometry, reference: np.ndarray, scans: np.ndarray
+) -> dict:
     """FastSLAM on one imported log with one filter seed, moving by the log's laser odometry
     ``laser``: its errors at the scans (``reference`` poses at the ``scans`` records), and the result."""
     config = dataclasses.replace(config, fastslam=dataclasses.replace(config.fastslam, seed=seed))
@@ -57,8 +60,14 @@ def run_one(run: LoadedRun, config: SlamConfig, seed: int, laser: LaserOdometry,
     result = slam_on_run(run, config, progress=False, laser=laser)
     seconds = time.perf_counter() - began
     raw, aligned = ate(result.mean_poses[scans], reference[scans])
-    return {"seed": seed, "ate": raw, "aligned": aligned, "seconds": seconds, "landmarks": len(result.landmarks),
-            "result": result}
+    return {
+        "seed": seed,
+        "ate": raw,
+        "aligned": aligned,
+        "seconds": seconds,
+        "landmarks": len(result.landmarks),
+        "result": result,
+    }
 
 
 def evaluate(name: str, seeds: int, out: Path) -> dict:
@@ -73,8 +82,9 @@ def evaluate(name: str, seeds: int, out: Path) -> dict:
     began = time.perf_counter()
     laser = laser_odometry(course_log, run.geometry, config.scan_matching)
     matching_seconds = time.perf_counter() - began
-    runs = sorted((run_one(run, config, seed, laser, reference, scans) for seed in range(seeds)),
-                  key=lambda run: run["ate"])
+    runs = sorted(
+        (run_one(run, config, seed, laser, reference, scans) for seed in range(seeds)), key=lambda run: run["ate"]
+    )
     median = runs[len(runs) // 2]
     row = {"log": name, "scans": len(scans), "particles": config.fastslam.NPARTICLES}
     reckoned = dead_reckoning(course_log, start)[scans]
@@ -85,11 +95,19 @@ def evaluate(name: str, seeds: int, out: Path) -> dict:
     row["FastSLAM aligned [m] (median)"] = float(np.median([run["aligned"] for run in runs]))
     row["landmarks"] = median["landmarks"]
     row["FastSLAM s"] = matching_seconds + float(np.median([run["seconds"] for run in runs]))
-    points = slam_report.scan_points_world(course_log, median["result"].mean_poses, run.geometry, 0.1,
-                                           config.corners.max_range)
+    points = slam_report.scan_points_world(
+        course_log, median["result"].mean_poses, run.geometry, 0.1, config.corners.max_range
+    )
     title = f"{name}: FastSLAM on laser odometry (filter seed {median['seed']}, the median of {seeds})"
-    slam_report.plot_slam(FIGURES / f"{name}.png", median["result"], points[::5], reference[scans], None,
-                          title=title, truth_label="reference path (gmapping)")
+    slam_report.plot_slam(
+        FIGURES / f"{name}.png",
+        median["result"],
+        points[::5],
+        reference[scans],
+        None,
+        title=title,
+        truth_label="reference path (gmapping)",
+    )
     beside_the_reference_picture(FIGURES / f"{name}_vs_reference.png", points, DATA / f"{name}-corrected.png", name)
     for suffix in (".log", ".truth.csv", ".map.json"):
         course.with_name(course.stem + suffix).unlink()

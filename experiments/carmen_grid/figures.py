@@ -30,8 +30,10 @@ def main() -> None:
     for name in LOGS:
         ours = RESULTS / f"{name}_seed0" / "occupancy.png"
         if ours.exists():
-            figure = side_by_side(scaled(cv2.imread(str(ours), cv2.IMREAD_GRAYSCALE)),
-                                  scaled(cv2.imread(str(CARMEN / f"{name}-corrected.png"), cv2.IMREAD_GRAYSCALE)))
+            figure = side_by_side(
+                scaled(cv2.imread(str(ours), cv2.IMREAD_GRAYSCALE)),
+                scaled(cv2.imread(str(CARMEN / f"{name}-corrected.png"), cv2.IMREAD_GRAYSCALE)),
+            )
             cv2.imwrite(str(RESULTS / f"{name}_compare.png"), figure)
 
 

@@ -52,12 +52,22 @@ def run_one(job: tuple[str, int]) -> dict:
     write_map(grid_states(result.grid), out)
     poses, covariances = result.record_trajectory(run.log, run.start_pose)
     write_trajectory(out / "trajectory.csv", run.log.times, poses, covariances)
-    return {"log": name, "seed": seed, "scans": len(result.scan_records), "processed": int(result.processed.sum()),
-            "ate_rmse_m": ate["rmse"], "ate_max_m": ate["max"], "seconds": seconds, "cpu_seconds": cpu_seconds,
-            "log_seconds": run.log.duration, "resamplings": result.resamplings,
-            "matched": float(np.nanmean(result.matched)),
-            "map_mb": result.peak_map_bytes / 2**20, "loaded_mb": loaded_mb,
-            "peak_mb": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024}
+    return {
+        "log": name,
+        "seed": seed,
+        "scans": len(result.scan_records),
+        "processed": int(result.processed.sum()),
+        "ate_rmse_m": ate["rmse"],
+        "ate_max_m": ate["max"],
+        "seconds": seconds,
+        "cpu_seconds": cpu_seconds,
+        "log_seconds": run.log.duration,
+        "resamplings": result.resamplings,
+        "matched": float(np.nanmean(result.matched)),
+        "map_mb": result.peak_map_bytes / 2**20,
+        "loaded_mb": loaded_mb,
+        "peak_mb": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024,
+    }
 
 
 def main() -> None:

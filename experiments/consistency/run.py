@@ -36,35 +36,53 @@ def one_log(seed: int, particles: list[int], versions: list[int], changes: dict)
     for version in versions:
         for count in particles:
             config = SlamConfig()
-            config = dataclasses.replace(config, fastslam=dataclasses.replace(
-                config.fastslam, NPARTICLES=count, version=version, seed=seed, **changes))
+            config = dataclasses.replace(
+                config,
+                fastslam=dataclasses.replace(config.fastslam, NPARTICLES=count, version=version, seed=seed, **changes),
+            )
             result = slam_on_run(run, config, progress=False)
             score = score_run(run, result)
             nis = nis_summary(result.nis)
-            rows.append({"seed": seed, "version": version, "particles": count,
-                         "ate_m": score.ate(), "reckoning_ate_m": score.ate(DEAD_RECKONING),
-                         "ate_ratio": score.ate() / score.ate(DEAD_RECKONING),
-                         "aligned_ate_m": score.ate(aligned=True),
-                         "median_nees": score.table.loc[FILTER_MEAN, "median_nees"],
-                         "nees_inside_95": score.nees_summary["inside_95"], "nis_mean": nis["mean"],
-                         "resampled_fraction": result.resampled_fraction, "landmarks": len(result.landmarks),
-                         "nees": score.nees})
+            rows.append(
+                {
+                    "seed": seed,
+                    "version": version,
+                    "particles": count,
+                    "ate_m": score.ate(),
+                    "reckoning_ate_m": score.ate(DEAD_RECKONING),
+                    "ate_ratio": score.ate() / score.ate(DEAD_RECKONING),
+                    "aligned_ate_m": score.ate(aligned=True),
+                    "median_nees": score.table.loc[FILTER_MEAN, "median_nees"],
+                    "nees_inside_95": score.nees_summary["inside_95"],
+                    "nis_mean": nis["mean"],
+                    "resampled_fraction": result.resampled_fraction,
+                    "landmarks": len(result.landmarks),
+                    "nees": score.nees,
+                }
+            )
     return rows
 
 
 def summary(table: pd.DataFrame) -> str:
     """Per version and particle count: medians over seeds and the worst seed of each check."""
     grouped = table.groupby(["version", "particles"])
-    shown = pd.DataFrame({
-        "seeds": grouped.size(),
-        "ATE median [mm]": grouped["ate_m"].median() * 1000, "ATE worst [mm]": grouped["ate_m"].max() * 1000,
-        "ATE/DR worst": grouped["ate_ratio"].max(),
-        "NEES median of medians": grouped["median_nees"].median(), "NEES worst median": grouped["median_nees"].max(),
-        "NIS mean": grouped["nis_mean"].mean(), "resampled worst": grouped["resampled_fraction"].max(),
-    })
-    return ("Simulated default mazes, default settings but the particle count and version. NEES: median over a "
-            f"run's records (consistent: 3, 95 % bound {POSE_BOUND_95:.2f}); NIS: mean over associated "
-            "observations (consistent: 2); resampled: share of scans.\n\n" + shown.to_markdown(floatfmt=".3g") + "\n")
+    shown = pd.DataFrame(
+        {
+            "seeds": grouped.size(),
+            "ATE median [mm]": grouped["ate_m"].median() * 1000,
+            "ATE worst [mm]": grouped["ate_m"].max() * 1000,
+            "ATE/DR worst": grouped["ate_ratio"].max(),
+            "NEES median of medians": grouped["median_nees"].median(),
+            "NEES worst median": grouped["median_nees"].max(),
+            "NIS mean": grouped["nis_mean"].mean(),
+            "resampled worst": grouped["resampled_fraction"].max(),
+        }
+    )
+    return (
+        "Simulated default mazes, default settings but the particle count and version. NEES: median over a "
+        f"run's records (consistent: 3, 95 % bound {POSE_BOUND_95:.2f}); NIS: mean over associated "
+        "observations (consistent: 2); resampled: share of scans.\n\n" + shown.to_markdown(floatfmt=".3g") + "\n"
+    )
 
 
 def plot_nees(table: pd.DataFrame, path: Path) -> None:
@@ -96,13 +114,19 @@ def main() -> None:
     parser.add_argument("--versions", type=int, nargs="+", default=[1, 2])
     parser.add_argument("--workers", type=int, default=2)
     parser.add_argument("--out", type=Path, default=HERE)
-    parser.add_argument("--set", nargs="*", default=[], metavar="NAME=VALUE",
-                        help="[fastslam] settings to change, e.g. sigmaX=0.003 (studies; committed tables use none)")
+    parser.add_argument(
+        "--set",
+        nargs="*",
+        default=[],
+        metavar="NAME=VALUE",
+        help="[fastslam] settings to change, e.g. sigmaX=0.003 (studies; committed tables use none)",
+    )
     arguments = parser.parse_args()
     changes = {name: float(value) for name, value in (item.split("=") for item in arguments.set)}
     with ProcessPoolExecutor(arguments.workers) as pool:
-        futures = [pool.submit(one_log, seed, arguments.particles, arguments.versions, changes)
-                   for seed in arguments.seeds]
+        futures = [
+            pool.submit(one_log, seed, arguments.particles, arguments.versions, changes) for seed in arguments.seeds
+        ]
         table = pd.DataFrame([row for future in futures for row in future.result()])
     arguments.out.mkdir(parents=True, exist_ok=True)
     table.drop(columns="nees").to_csv(arguments.out / "results.csv", index=False, float_format="%.6g")

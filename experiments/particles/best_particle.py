@@ -32,24 +32,31 @@ def main(seeds=(0, 1), counts=(100, 1000)) -> pd.DataFrame:
             run = load_run(simulate(Path(folder) / "run.log", seed=seed, progress=False).log_path)
         for count in counts:
             config = SlamConfig()
-            config = dataclasses.replace(config, fastslam=dataclasses.replace(config.fastslam, NPARTICLES=count,
-                                                                              seed=seed))
+            config = dataclasses.replace(
+                config, fastslam=dataclasses.replace(config.fastslam, NPARTICLES=count, seed=seed)
+            )
             score = score_run(run, slam_on_run(run, config, progress=False))
-            rows.append({"seed": seed, "particles": count,
-                         "mean path ATE [mm]": 1000 * score.ate(FILTER_MEAN),
-                         "mean path ATE aligned [mm]": 1000 * score.ate(FILTER_MEAN, aligned=True),
-                         "best particle ATE [mm]": 1000 * score.ate(BEST),
-                         "best particle ATE aligned [mm]": 1000 * score.ate(BEST, aligned=True),
-                         "map aligned [mm]": 1000 * score.map_errors["aligned"]["rmse"],
-                         "median NEES": score.nees_summary["median"]})
+            rows.append(
+                {
+                    "seed": seed,
+                    "particles": count,
+                    "mean path ATE [mm]": 1000 * score.ate(FILTER_MEAN),
+                    "mean path ATE aligned [mm]": 1000 * score.ate(FILTER_MEAN, aligned=True),
+                    "best particle ATE [mm]": 1000 * score.ate(BEST),
+                    "best particle ATE aligned [mm]": 1000 * score.ate(BEST, aligned=True),
+                    "map aligned [mm]": 1000 * score.map_errors["aligned"]["rmse"],
+                    "median NEES": score.nees_summary["median"],
+                }
+            )
     return pd.DataFrame(rows)
 
 
 if __name__ == "__main__":
     table = main()
     table[["seed", "particles"]] = table[["seed", "particles"]].astype(str)
-    text = ("Default settings (FastSLAM 2.0), default maze runs; the map is the best-weighted particle's "
-            "(`python experiments/particles/best_particle.py`).\n\n" + table.to_markdown(index=False, floatfmt=".2f")
-            + "\n")
+    text = (
+        "Default settings (FastSLAM 2.0), default maze runs; the map is the best-weighted particle's "
+        "(`python experiments/particles/best_particle.py`).\n\n" + table.to_markdown(index=False, floatfmt=".2f") + "\n"
+    )
     (HERE / "best_particle.md").write_text(text)
     print(text)

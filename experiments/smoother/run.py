@@ -82,12 +82,25 @@ def _optimum_row(seed: int, name: str, smoothed: Smoothed, truth: np.ndarray, re
     return _row(seed, name, table.loc[name], nees, result.chi2_per_dof, smoothed.seconds)
 
 
-def _row(seed: int, name: str, errors: pd.Series, nees: dict | None = None, chi2_per_dof: float = np.nan,
-         seconds: float = np.nan) -> dict:
+def _row(
+    seed: int,
+    name: str,
+    errors: pd.Series,
+    nees: dict | None = None,
+    chi2_per_dof: float = np.nan,
+    seconds: float = np.nan,
+) -> dict:
     nees = nees or {}
-    return {"seed": seed, "estimator": name, "ate_rmse": errors["ate_rmse"], "ate_aligned_rmse": errors["aligned_rmse"],
-            "nees_mean": nees.get("mean"), "nees_median": nees.get("median"), "chi2_per_dof": chi2_per_dof,
-            "seconds": seconds}
+    return {
+        "seed": seed,
+        "estimator": name,
+        "ate_rmse": errors["ate_rmse"],
+        "ate_aligned_rmse": errors["aligned_rmse"],
+        "nees_mean": nees.get("mean"),
+        "nees_median": nees.get("median"),
+        "chi2_per_dof": chi2_per_dof,
+        "seconds": seconds,
+    }
 
 
 def summary_markdown(table: pd.DataFrame, commit: str, config_path) -> str:
@@ -95,21 +108,28 @@ def summary_markdown(table: pd.DataFrame, commit: str, config_path) -> str:
     known-association optimum (mean of the per-seed ratios)."""
     table = pd.concat([table[table.estimator == DEAD_RECKONING], table[table.estimator != DEAD_RECKONING]])
     optimum = table[table.estimator == OPTIMUM].set_index("seed")
-    table = table.assign(ratio=table.ate_rmse / table.seed.map(optimum.ate_rmse),
-                         aligned_ratio=table.ate_aligned_rmse / table.seed.map(optimum.ate_aligned_rmse))
-    lines = [f"| {name} | {_spread(group.ate_rmse)} | {_spread(group.ate_aligned_rmse)} | {_mean(group.ratio)} "
-             f"| {_mean(group.aligned_ratio)} | {_mean(group.nees_median, 1)} | {_mean(group.chi2_per_dof)} "
-             f"| {_mean(group.seconds)} |" for name, group in table.groupby("estimator", sort=False)]
+    table = table.assign(
+        ratio=table.ate_rmse / table.seed.map(optimum.ate_rmse),
+        aligned_ratio=table.ate_aligned_rmse / table.seed.map(optimum.ate_aligned_rmse),
+    )
+    lines = [
+        f"| {name} | {_spread(group.ate_rmse)} | {_spread(group.ate_aligned_rmse)} | {_mean(group.ratio)} "
+        f"| {_mean(group.aligned_ratio)} | {_mean(group.nees_median, 1)} | {_mean(group.chi2_per_dof)} "
+        f"| {_mean(group.seconds)} |"
+        for name, group in table.groupby("estimator", sort=False)
+    ]
     seeds = ", ".join(str(s) for s in sorted(table.seed.unique()))
-    return (f"Produced by `experiments/smoother/run.py` on commit {commit} with "
-            f"{'the default slam settings' if config_path is None else config_path}, seeds {seeds} (default "
-            "simulated maze run each). ATE RMSE at every record in mm, mean over the seeds (min-max); ratio: to the "
-            "known-association optimum on the same seed, mean of the per-seed ratios; NEES: median over the records "
-            "(FastSLAM: every record, with the particle cloud's covariance; optimum: the scans, with the covariance "
-            "from its information matrix), mean over the seeds; chi2/dof of the optimum's residuals; seconds: "
-            "FastSLAM's filtering, or the optimum's corner extraction and solving.\n\n"
-            "| estimator | ATE [mm] | ATE aligned [mm] | ratio | ratio aligned | NEES median | chi2/dof | seconds |\n"
-            "|:--|--:|--:|--:|--:|--:|--:|--:|\n" + "\n".join(lines) + "\n")
+    return (
+        f"Produced by `experiments/smoother/run.py` on commit {commit} with "
+        f"{'the default slam settings' if config_path is None else config_path}, seeds {seeds} (default "
+        "simulated maze run each). ATE RMSE at every record in mm, mean over the seeds (min-max); ratio: to the "
+        "known-association optimum on the same seed, mean of the per-seed ratios; NEES: median over the records "
+        "(FastSLAM: every record, with the particle cloud's covariance; optimum: the scans, with the covariance "
+        "from its information matrix), mean over the seeds; chi2/dof of the optimum's residuals; seconds: "
+        "FastSLAM's filtering, or the optimum's corner extraction and solving.\n\n"
+        "| estimator | ATE [mm] | ATE aligned [mm] | ratio | ratio aligned | NEES median | chi2/dof | seconds |\n"
+        "|:--|--:|--:|--:|--:|--:|--:|--:|\n" + "\n".join(lines) + "\n"
+    )
 
 
 def _spread(metres: pd.Series) -> str:
@@ -134,8 +154,9 @@ def main():
         rows = [row for rows in pool.map(seed_rows, arguments.seeds, [config] * len(arguments.seeds)) for row in rows]
     table = pd.DataFrame(rows)
     table.to_csv(HERE / "results.csv", index=False)
-    commit = subprocess.run(["git", "describe", "--always", "--dirty"], capture_output=True, text=True,
-                            cwd=HERE, check=True).stdout.strip()
+    commit = subprocess.run(
+        ["git", "describe", "--always", "--dirty"], capture_output=True, text=True, cwd=HERE, check=True
+    ).stdout.strip()
     text = summary_markdown(table, commit, arguments.config)
     (HERE / "results.md").write_text(text)
     print(text)

@@ -54,8 +54,10 @@ class MazeGrids:
 
     def fits(self, maze: Maze) -> bool:
         """Whether ``maze`` has these grids' shape, cell size and wall thickness."""
-        return (self.solid.shape[1:] == (2 * maze.rows + 1, 2 * maze.cols + 1)
-                and (maze.cell_size, maze.wall_thickness) == (self.cell_size, self.thickness))
+        return self.solid.shape[1:] == (2 * maze.rows + 1, 2 * maze.cols + 1) and (
+            maze.cell_size,
+            maze.wall_thickness,
+        ) == (self.cell_size, self.thickness)
 
     def set(self, env: int, maze: Maze) -> None:
         """Make grid ``env`` that of ``maze`` (which must ``fit``)."""
@@ -66,12 +68,21 @@ class MazeGrids:
     def blocks_of(self, x: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Block indices (i, j) of the points (x, y) (metres), each clipped to the grid."""
         height, width = self.solid.shape[1:]
-        return (np.minimum(np.maximum(_band(y, self.cell_size, self.thickness), 0), height - 1),
-                np.minimum(np.maximum(_band(x, self.cell_size, self.thickness), 0), width - 1))
+        return (
+            np.minimum(np.maximum(_band(y, self.cell_size, self.thickness), 0), height - 1),
+            np.minimum(np.maximum(_band(x, self.cell_size, self.thickness), 0), width - 1),
+        )
 
     # -- ray casting ------------------------------------------------------------------------
-    def cast(self, envs: np.ndarray, x: np.ndarray, y: np.ndarray, heading: np.ndarray, bearings: np.ndarray,
-             max_range: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    def cast(
+        self,
+        envs: np.ndarray,
+        x: np.ndarray,
+        y: np.ndarray,
+        heading: np.ndarray,
+        bearings: np.ndarray,
+        max_range: float,
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Cast beams from K sensors, sensor k at (x[k], y[k]) (m) facing ``heading[k]`` (rad) in maze
         ``envs[k]``, along ``bearings`` (N,) (rad, sensor frame).
 
@@ -91,8 +102,17 @@ class MazeGrids:
         i, j = (np.repeat(index, beams) for index in self.blocks_of(x, y))
         step_x, step_y = np.where(dx > 0, 1, -1), np.where(dy > 0, 1, -1)
         # Per active ray: ray index, next x edge, next y edge, flat block index, x step, y step, flat y step.
-        ints = np.stack([np.arange(count * beams), j + (step_x > 0), i + (step_y > 0),
-                         np.repeat(envs * height * width, beams) + i * width + j, step_x, step_y, step_y * width])
+        ints = np.stack(
+            [
+                np.arange(count * beams),
+                j + (step_x > 0),
+                i + (step_y > 0),
+                np.repeat(envs * height * width, beams) + i * width + j,
+                step_x,
+                step_y,
+                step_y * width,
+            ]
+        )
         origin_x, origin_y = np.repeat(x, beams), np.repeat(y, beams)
         floats = np.stack([origin_x, origin_y, 1 / dx, 1 / dy])
         distances = np.full(count * beams, np.inf)
@@ -132,8 +152,12 @@ class MazeGrids:
         vertical = bins < len(self.xs) * along_y
         line, step = np.where(vertical, np.divmod(bins, along_y), np.divmod(bins - len(self.xs) * along_y, along_x))
         centre = (step + 0.5) * spacing
-        return np.column_stack([np.where(vertical, self.xs[np.minimum(line, len(self.xs) - 1)], self.xs[0] + centre),
-                                np.where(vertical, self.ys[0] + centre, self.ys[np.minimum(line, len(self.ys) - 1)])])
+        return np.column_stack(
+            [
+                np.where(vertical, self.xs[np.minimum(line, len(self.xs) - 1)], self.xs[0] + centre),
+                np.where(vertical, self.ys[0] + centre, self.ys[np.minimum(line, len(self.ys) - 1)]),
+            ]
+        )
 
     def face_bins(self, faces: np.ndarray, along: np.ndarray, spacing: float) -> np.ndarray:
         """Bin index (same shape as ``faces``) of the wall points ``along`` (m) ``faces`` (as
@@ -167,8 +191,10 @@ class MazeGrids:
         i = np.minimum(np.maximum(i[:, None, None] + offsets[:, None], 0), height - 1)  # (E, n, 1)
         j = np.minimum(np.maximum(j[:, None, None] + offsets, 0), width - 1)  # (E, 1, n)
         shape = (len(x), len(offsets), len(offsets))
-        boxes = np.stack([np.broadcast_to(bound, shape) for bound in
-                          (self.xs[j], self.ys[i], self.xs[j + 1], self.ys[i + 1])], axis=-1).reshape(len(x), -1, 4)
+        boxes = np.stack(
+            [np.broadcast_to(bound, shape) for bound in (self.xs[j], self.ys[i], self.xs[j + 1], self.ys[i + 1])],
+            axis=-1,
+        ).reshape(len(x), -1, 4)
         solid = self.solid[np.arange(len(x))[:, None, None], i, j].reshape(len(x), -1)
         return np.where(solid[..., None], boxes, np.inf)
 

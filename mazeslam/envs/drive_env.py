@@ -44,8 +44,13 @@ class DriveEnv(gym.Env):
     after ``max_steps`` steps.
     """
 
-    def __init__(self, config: SimulationConfig | None = None, max_steps: int = 3000, control_period: float = 0.1,
-                 action_type: str = "velocity"):
+    def __init__(
+        self,
+        config: SimulationConfig | None = None,
+        max_steps: int = 3000,
+        control_period: float = 0.1,
+        action_type: str = "velocity",
+    ):
         if action_type not in ("velocity", "wheels"):
             raise ValueError(f"action_type must be 'velocity' or 'wheels', got {action_type!r}")
         if max_steps < 1 or control_period <= 0:
@@ -57,11 +62,15 @@ class DriveEnv(gym.Env):
         robot, laser = self.config.robot, self.config.laser
         self.top_turn_rate = 2 * robot.max_wheel_speed / robot.wheelbase  # rad/s, wheels opposite at top speed
         reach = 2.0 * robot.max_wheel_speed * control_period  # odometry bound, with room for slip
-        self.observation_space = spaces.Dict({
-            "scan": spaces.Box(0.0, laser.max_range, shape=(laser.beams,), dtype=np.float32),
-            "odometry": spaces.Box(np.array([-reach, -reach * 2 / robot.wheelbase], dtype=np.float32),
-                                   np.array([reach, reach * 2 / robot.wheelbase], dtype=np.float32)),
-        })
+        self.observation_space = spaces.Dict(
+            {
+                "scan": spaces.Box(0.0, laser.max_range, shape=(laser.beams,), dtype=np.float32),
+                "odometry": spaces.Box(
+                    np.array([-reach, -reach * 2 / robot.wheelbase], dtype=np.float32),
+                    np.array([reach, reach * 2 / robot.wheelbase], dtype=np.float32),
+                ),
+            }
+        )
         self.action_space = spaces.Box(-1.0, 1.0, shape=(2,), dtype=np.float32)
         self.steps: int | None = None  # steps into the episode; None before the first reset
         self.time = 0.0  # seconds into the episode

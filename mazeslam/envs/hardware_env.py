@@ -36,8 +36,14 @@ class HardwareMazeEnv(DriveEnv):
     The caller owns ``robot``: closing the environment leaves it connected.
     """
 
-    def __init__(self, robot: Robot, config: SimulationConfig | None = None, max_steps: int = 3000,
-                 control_period: float = 0.1, action_type: str = "velocity"):
+    def __init__(
+        self,
+        robot: Robot,
+        config: SimulationConfig | None = None,
+        max_steps: int = 3000,
+        control_period: float = 0.1,
+        action_type: str = "velocity",
+    ):
         super().__init__(config, max_steps, control_period, action_type)
         self.robot = robot
 

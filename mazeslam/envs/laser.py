@@ -49,8 +49,9 @@ class LaserParams:
         too_many = beams_problem(self.beams)
         require(too_many is None, f"laser beams: {too_many}")
         require(self.max_range > 0, f"laser max_range must be positive, got {self.max_range}")
-        require(0 <= self.min_range < self.max_range,
-                f"laser min_range must be in [0, max_range), got {self.min_range}")
+        require(
+            0 <= self.min_range < self.max_range, f"laser min_range must be in [0, max_range), got {self.min_range}"
+        )
         require(self.range_noise_std >= 0, f"laser range_noise_std must be >= 0, got {self.range_noise_std}")
         require(0 <= self.dropout < 1, f"laser dropout must be in [0, 1), got {self.dropout}")
 

@@ -69,8 +69,10 @@ class Maze:
                 f"{self.cell_size} m (at most 1000 m)"
             )
         closed = (
-            self.horizontal[0].all() and self.horizontal[-1].all()
-            and self.vertical[:, 0].all() and self.vertical[:, -1].all()
+            self.horizontal[0].all()
+            and self.horizontal[-1].all()
+            and self.vertical[:, 0].all()
+            and self.vertical[:, -1].all()
         )
         if not closed:
             raise ValueError("the maze's outer boundary must be closed (a wall on every border edge)")
@@ -176,8 +178,13 @@ def generate_maze(
             chosen = rng.random(len(walls)) < loop_fraction
             array[tuple(walls[chosen].T)] = False
     return Maze(
-        horizontal, vertical, cell_size, wall_thickness, (0, 0),
-        name=f"random-{rows}x{cols}", seed=None if seed is None else int(seed),
+        horizontal,
+        vertical,
+        cell_size,
+        wall_thickness,
+        (0, 0),
+        name=f"random-{rows}x{cols}",
+        seed=None if seed is None else int(seed),
     )
 
 
@@ -205,8 +212,9 @@ def parse_maze(text: str, source: str = "<text>") -> Maze:
             continue
         if "=" not in stripped:
             shown = stripped if len(stripped) <= 40 else stripped[:37] + "..."
-            raise MazeFormatError(f"{source}:{number}: not a maze file: expected 'key = value' or the '+---+' "
-                                  f"drawing, got {shown!r}")
+            raise MazeFormatError(
+                f"{source}:{number}: not a maze file: expected 'key = value' or the '+---+' drawing, got {shown!r}"
+            )
         key, value = (part.strip() for part in stripped.split("=", 1))
         params[key] = value
     if len(drawing) < 3 or len(drawing) % 2 == 0:

@@ -59,10 +59,21 @@ class MazeEnv(DriveEnv):
 
     metadata = {"render_modes": ["human", "rgb_array"], "render_fps": 10}
 
-    def __init__(self, render_mode: str | None = None, config: SimulationConfig | None = None, rows: int = 4,
-                 cols: int = 4, maze: Maze | str | None = None, loop_fraction: float = 0.0,
-                 max_steps: int | None = None, control_period: float = 0.1, action_type: str = "velocity",
-                 wall_reward: float = 10.0, cell_reward: float = 1.0, collision_penalty: float = 0.5):
+    def __init__(
+        self,
+        render_mode: str | None = None,
+        config: SimulationConfig | None = None,
+        rows: int = 4,
+        cols: int = 4,
+        maze: Maze | str | None = None,
+        loop_fraction: float = 0.0,
+        max_steps: int | None = None,
+        control_period: float = 0.1,
+        action_type: str = "velocity",
+        wall_reward: float = 10.0,
+        cell_reward: float = 1.0,
+        collision_penalty: float = 0.5,
+    ):
         if render_mode is not None and render_mode not in self.metadata["render_modes"]:
             raise ValueError(f"render_mode must be one of {self.metadata['render_modes']} or None, got {render_mode!r}")
         super().__init__(config, max_steps or 1, control_period, action_type)  # checks the settings
@@ -79,8 +90,9 @@ class MazeEnv(DriveEnv):
         super().reset(seed=seed)
         options = options or {}
         self.steps, self.time = 0, 0.0
-        maze = choose_maze(options, self.maze_option, self.rows, self.cols, self.loop_fraction,
-                           self.config.maze, self.np_random)
+        maze = choose_maze(
+            options, self.maze_option, self.rows, self.cols, self.loop_fraction, self.config.maze, self.np_random
+        )
         self.maze = maze
         self.start_pose = draw_start_pose(maze, options, self.np_random)
         self.simulated = SimulatedRobot(maze, self.config, start_pose=self.start_pose, rng=self.np_random)
@@ -102,8 +114,11 @@ class MazeEnv(DriveEnv):
         new_cell = not self.visited[cell]
         self.visited[cell] = True
         newly_seen = self._see()
-        reward = (self.wall_reward * newly_seen * WALL_SAMPLE_SPACING + self.cell_reward * new_cell
-                  - self.collision_penalty * collision)
+        reward = (
+            self.wall_reward * newly_seen * WALL_SAMPLE_SPACING
+            + self.cell_reward * new_cell
+            - self.collision_penalty * collision
+        )
         terminated = bool(self.visited.all())
         truncated = self.max_steps is not None and self.steps >= self.max_steps
         if self.render_mode == "human":
@@ -129,8 +144,13 @@ class MazeEnv(DriveEnv):
         return int(self.seen.sum()) - before
 
     def _info(self, collision: bool) -> dict:
-        return {"pose": self.simulated.pose, "coverage": float(self.seen.mean()),
-                "visited": float(self.visited.mean()), "collision": bool(collision), "time": self.time}
+        return {
+            "pose": self.simulated.pose,
+            "coverage": float(self.seen.mean()),
+            "visited": float(self.visited.mean()),
+            "collision": bool(collision),
+            "time": self.time,
+        }
 
     # -- rendering ----------------------------------------------------------------------------
     def render(self):
@@ -160,8 +180,15 @@ class MazeEnv(DriveEnv):
             self._figure = None
 
 
-def choose_maze(options: dict, default: Maze | str | None, rows: int, cols: int, loop_fraction: float,
-                params: MazeParams, rng: np.random.Generator) -> Maze:
+def choose_maze(
+    options: dict,
+    default: Maze | str | None,
+    rows: int,
+    cols: int,
+    loop_fraction: float,
+    params: MazeParams,
+    rng: np.random.Generator,
+) -> Maze:
     """The maze of a new episode: ``options["maze"]`` or ``default`` (a ``Maze``, a maze file, or
     None / "random": a random maze of ``options`` or the given rows, cols and loop fraction, with
     ``params``' cell size and wall thickness, drawn from ``rng``)."""
@@ -170,8 +197,14 @@ def choose_maze(options: dict, default: Maze | str | None, rows: int, cols: int,
         return choice
     if choice is not None and str(choice) != "random":
         return load_maze(choice)
-    return generate_maze(options.get("rows", rows), options.get("cols", cols), rng, params.cell_size,
-                         params.wall_thickness, options.get("loop_fraction", loop_fraction))
+    return generate_maze(
+        options.get("rows", rows),
+        options.get("cols", cols),
+        rng,
+        params.cell_size,
+        params.wall_thickness,
+        options.get("loop_fraction", loop_fraction),
+    )
 
 
 def draw_start_pose(maze: Maze, options: dict, rng: np.random.Generator) -> np.ndarray:

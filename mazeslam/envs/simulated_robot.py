@@ -21,8 +21,14 @@ class SimulatedRobot(Robot):
     computer allows. ``pose`` is the true pose (for truth sidecars).
     """
 
-    def __init__(self, maze: Maze, config: SimulationConfig | None = None, seed: int = 0,
-                 start_pose: np.ndarray | None = None, rng: np.random.Generator | None = None):
+    def __init__(
+        self,
+        maze: Maze,
+        config: SimulationConfig | None = None,
+        seed: int = 0,
+        start_pose: np.ndarray | None = None,
+        rng: np.random.Generator | None = None,
+    ):
         self.config = config or SimulationConfig()
         self.maze = maze
         self.walls = wall_geometry(maze)

@@ -46,9 +46,11 @@ class LoggerParams:
         require(self.scan_period > 0, f"logger scan_period must be positive, got {self.scan_period}")
         require(self.odometry_rate > 0, f"logger odometry_rate must be positive, got {self.odometry_rate}")
         require(self.physics_rate <= 10_000, f"logger physics_rate must be at most 10000 Hz, got {self.physics_rate}")
-        require(self.physics_rate >= self.odometry_rate and self.physics_rate * self.scan_period >= 1,
-                f"logger physics_rate {self.physics_rate} Hz must be at least the odometry rate and "
-                f"one step per scan period")
+        require(
+            self.physics_rate >= self.odometry_rate and self.physics_rate * self.scan_period >= 1,
+            f"logger physics_rate {self.physics_rate} Hz must be at least the odometry rate and "
+            f"one step per scan period",
+        )
 
 
 @dataclass(frozen=True)
@@ -65,8 +67,10 @@ class MazeParams:
         require(self.rows >= 1 and self.cols >= 1, f"maze rows and cols must be >= 1, got {self.rows} x {self.cols}")
         too_big = maze_problem(self.rows, self.cols)
         require(too_big is None, f"maze rows x cols: {too_big}")
-        require(0 < self.wall_thickness < self.cell_size,
-                f"maze wall_thickness {self.wall_thickness} m must be positive and below cell_size {self.cell_size} m")
+        require(
+            0 < self.wall_thickness < self.cell_size,
+            f"maze wall_thickness {self.wall_thickness} m must be positive and below cell_size {self.cell_size} m",
+        )
         require(0 <= self.loop_fraction <= 1, f"maze loop_fraction must be in [0, 1], got {self.loop_fraction}")
 
 
@@ -90,9 +94,11 @@ class SimulationConfig:
         require(self.max_duration > 0, f"max_duration must be positive, got {self.max_duration}")
         too_long = duration_problem(self.max_duration)
         require(too_long is None, f"max_duration: {too_long}")
-        require(self.drive.cruise_speed <= self.robot.max_wheel_speed,
-                f"drive cruise_speed {self.drive.cruise_speed} m/s exceeds the robot's max_wheel_speed "
-                f"{self.robot.max_wheel_speed} m/s")
+        require(
+            self.drive.cruise_speed <= self.robot.max_wheel_speed,
+            f"drive cruise_speed {self.drive.cruise_speed} m/s exceeds the robot's max_wheel_speed "
+            f"{self.robot.max_wheel_speed} m/s",
+        )
 
 
 def load_config(path: str | Path | None) -> SimulationConfig:
@@ -144,9 +150,7 @@ def simulate(
         require(duration > 0, f"duration must be positive, got {duration}")
         too_long = duration_problem(duration)
         require(too_long is None, f"duration: {too_long}")
-    maze_rng, drive_rng, slip_rng, laser_rng = (
-        np.random.default_rng(s) for s in np.random.SeedSequence(seed).spawn(4)
-    )
+    maze_rng, drive_rng, slip_rng, laser_rng = (np.random.default_rng(s) for s in np.random.SeedSequence(seed).spawn(4))
     maze = _resolve_maze(maze, config.maze, maze_rng, seed)
     walls = wall_geometry(maze)
     start_pose = np.array([*maze.cell_center(*maze.start_cell), 0.0])
@@ -163,8 +167,12 @@ def simulate(
     steps_per_scan = logger.scan_period / dt
     record_times: list[float] = []
     record_poses: list[np.ndarray] = []
-    bar = tqdm(total=round(end_time if duration is not None else 0) or None, unit="sim s",
-               disable=not progress, desc=f"simulate {out.name}")
+    bar = tqdm(
+        total=round(end_time if duration is not None else 0) or None,
+        unit="sim s",
+        disable=not progress,
+        desc=f"simulate {out.name}",
+    )
     with LogWriter(out, config.laser.beams) as writer:
         step = 0
         next_odometry, next_scan = steps_per_odometry, steps_per_scan
@@ -194,13 +202,23 @@ def simulate(
     sidecars.write_truth(truth_file, times, poses)
     sensor = config.laser.sensor_mapping()
     sidecars.write_map(
-        map_file, walls.surfaces, walls.corners, sensor,
+        map_file,
+        walls.surfaces,
+        walls.corners,
+        sensor,
         corner_convex=walls.corner_convex.tolist(),
         start_pose=start_pose.tolist(),
         seed=seed,
         duration=duration,
-        maze={"name": maze.name, "rows": maze.rows, "cols": maze.cols, "cell_size": maze.cell_size,
-              "wall_thickness": maze.wall_thickness, "seed": maze.seed, "text": maze.to_text()},
+        maze={
+            "name": maze.name,
+            "rows": maze.rows,
+            "cols": maze.cols,
+            "cell_size": maze.cell_size,
+            "wall_thickness": maze.wall_thickness,
+            "seed": maze.seed,
+            "text": maze.to_text(),
+        },
         parameters=to_mapping(config),
     )
     return SimulationResult(out, truth_file, map_file, times, poses, maze, bool(getattr(policy, "done", True)))
@@ -211,7 +229,8 @@ def _resolve_maze(maze, params: MazeParams, rng: np.random.Generator, seed: int)
         return maze
     if maze is not None and str(maze) != "random":
         return load_maze(maze)
-    random_maze = generate_maze(params.rows, params.cols, rng, params.cell_size, params.wall_thickness,
-                                params.loop_fraction)
+    random_maze = generate_maze(
+        params.rows, params.cols, rng, params.cell_size, params.wall_thickness, params.loop_fraction
+    )
     random_maze.seed = seed
     return random_maze

@@ -56,11 +56,23 @@ class MazeVectorEnv(VectorEnv):
 
     metadata = {"render_modes": ["rgb_array"], "render_fps": 10, "autoreset_mode": AutoresetMode.NEXT_STEP}
 
-    def __init__(self, num_envs: int = 1, render_mode: str | None = None, config: SimulationConfig | None = None,
-                 rows: int = 4, cols: int = 4, maze: Maze | str | None = None, loop_fraction: float = 0.0,
-                 max_steps: int = 3000, control_period: float = 0.1, action_type: str = "velocity",
-                 wall_reward: float = 10.0, cell_reward: float = 1.0, collision_penalty: float = 0.5,
-                 render_envs: tuple[int, ...] = (0,)):
+    def __init__(
+        self,
+        num_envs: int = 1,
+        render_mode: str | None = None,
+        config: SimulationConfig | None = None,
+        rows: int = 4,
+        cols: int = 4,
+        maze: Maze | str | None = None,
+        loop_fraction: float = 0.0,
+        max_steps: int = 3000,
+        control_period: float = 0.1,
+        action_type: str = "velocity",
+        wall_reward: float = 10.0,
+        cell_reward: float = 1.0,
+        collision_penalty: float = 0.5,
+        render_envs: tuple[int, ...] = (0,),
+    ):
         if num_envs < 1:
             raise ValueError(f"num_envs must be >= 1, got {num_envs}")
         if render_mode is not None and render_mode not in self.metadata["render_modes"]:
@@ -115,8 +127,11 @@ class MazeVectorEnv(VectorEnv):
         self.time += moving * self.physics_steps / self.config.logger.physics_rate
         odometry = self._read_odometry()
         newly_seen, new_cell = self._observe(everyone, scan_noise, dropouts)
-        rewards = (self.wall_reward * newly_seen * WALL_SAMPLE_SPACING + self.cell_reward * new_cell
-                   - self.collision_penalty * self._collision) * moving
+        rewards = (
+            self.wall_reward * newly_seen * WALL_SAMPLE_SPACING
+            + self.cell_reward * new_cell
+            - self.collision_penalty * self._collision
+        ) * moving
         terminated = self.visited.all(axis=(1, 2)) & moving
         truncated = (self.steps >= self.max_steps) & moving
         self._autoreset = terminated | truncated
@@ -128,8 +143,9 @@ class MazeVectorEnv(VectorEnv):
             if seed is not None or self.generators[env] is None:
                 self.generators[env], _ = seeding.np_random(seed)
             rng = self.generators[env]
-            maze = choose_maze(options, self.maze_option, self.rows, self.cols, self.loop_fraction,
-                               self.config.maze, rng)
+            maze = choose_maze(
+                options, self.maze_option, self.rows, self.cols, self.loop_fraction, self.config.maze, rng
+            )
             self.mazes[env] = maze
             self.start_poses[env] = draw_start_pose(maze, options, rng)
         if len(envs) and (self.grids is None or not all(self.grids.fits(self.mazes[e]) for e in envs)):
@@ -183,7 +199,7 @@ class MazeVectorEnv(VectorEnv):
             normals[env] = self.generators[env].standard_normal(normals.shape[1])
             if self.config.laser.dropout:
                 uniforms[env] = self.generators[env].random(beams)
-        return normals[:, :2 * steps].reshape(-1, steps, 2), normals[:, 2 * steps:], uniforms
+        return normals[:, : 2 * steps].reshape(-1, steps, 2), normals[:, 2 * steps :], uniforms
 
     # -- physics ------------------------------------------------------------------------------
     def _wheel_speeds(self, actions: np.ndarray) -> np.ndarray:
@@ -243,8 +259,9 @@ class MazeVectorEnv(VectorEnv):
         valid = np.isfinite(ranges) & (noisy >= laser.min_range) & (noisy <= laser.max_range)
         self.last_scan[envs] = np.where(valid & (uniforms[envs] >= laser.dropout), noisy, 0.0)
         hit = np.isfinite(ranges)
-        bins = (np.broadcast_to(envs[:, None], hit.shape)[hit] * self.seen.shape[1]
-                + grids.face_bins(faces[hit], along[hit], WALL_SAMPLE_SPACING))
+        bins = np.broadcast_to(envs[:, None], hit.shape)[hit] * self.seen.shape[1] + grids.face_bins(
+            faces[hit], along[hit], WALL_SAMPLE_SPACING
+        )
         new = np.unique(bins[self.wall_bins.ravel()[bins] & ~self.seen.ravel()[bins]])
         self.seen.ravel()[new] = True
         newly_seen = np.bincount(new // self.seen.shape[1], minlength=self.num_envs)
@@ -269,18 +286,28 @@ class MazeVectorEnv(VectorEnv):
         """The single env's info keys as (E, ...) arrays, with ``_key`` masks marking ``envs``."""
         mask = np.zeros(self.num_envs, dtype=bool)
         mask[envs] = True
-        values = {"pose": self.poses.copy(), "coverage": self.seen_counts / self.wall_counts,
-                  "visited": self.visited.mean(axis=(1, 2)), "collision": self._collision.copy(),
-                  "time": self.time.copy()}
+        values = {
+            "pose": self.poses.copy(),
+            "coverage": self.seen_counts / self.wall_counts,
+            "visited": self.visited.mean(axis=(1, 2)),
+            "collision": self._collision.copy(),
+            "time": self.time.copy(),
+        }
         return {**values, **{f"_{key}": mask.copy() for key in values}}
 
     # -- one env's view, rendering --------------------------------------------------------------
     def sub_env(self, index: int) -> SubEnv:
         """Env ``index``'s episode as a single env shows it (for wrappers and drawing)."""
         seen = self.seen[index] & self.wall_bins[index]
-        return SubEnv(self._maze(index), self.config, self.start_poses[index].copy(), self.poses[index].copy(),
-                      self.visited[index].copy(), self.last_scan[index].copy(),
-                      self._grids().bin_points(np.flatnonzero(seen), WALL_SAMPLE_SPACING))
+        return SubEnv(
+            self._maze(index),
+            self.config,
+            self.start_poses[index].copy(),
+            self.poses[index].copy(),
+            self.visited[index].copy(),
+            self.last_scan[index].copy(),
+            self._grids().bin_points(np.flatnonzero(seen), WALL_SAMPLE_SPACING),
+        )
 
     def render(self):
         if self.render_mode is None:
@@ -291,8 +318,9 @@ class MazeVectorEnv(VectorEnv):
         columns = int(np.ceil(np.sqrt(len(images))))
         blank = np.full_like(images[0], 255)
         images += [blank] * (-len(images) % columns)
-        return np.concatenate([np.concatenate(images[k:k + columns], axis=1)
-                               for k in range(0, len(images), columns)], axis=0)
+        return np.concatenate(
+            [np.concatenate(images[k : k + columns], axis=1) for k in range(0, len(images), columns)], axis=0
+        )
 
 
 @dataclass

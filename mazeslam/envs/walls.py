@@ -92,9 +92,7 @@ def _runs(is_face: np.ndarray, orientation: np.ndarray):
     """Maximal runs [start, stop) of consecutive faces with the same orientation (solid side)."""
     start = None
     for k in range(len(is_face) + 1):
-        continues = (
-            k < len(is_face) and is_face[k] and start is not None and orientation[k] == orientation[start]
-        )
+        continues = k < len(is_face) and is_face[k] and start is not None and orientation[k] == orientation[start]
         if start is not None and not continues:
             yield start, k
             start = None

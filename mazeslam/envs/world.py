@@ -41,8 +41,10 @@ class RobotParams:
     def __post_init__(self):
         for name in ("wheel_radius", "wheelbase", "body_radius", "max_wheel_speed", "mass"):
             require(getattr(self, name) > 0, f"robot {name} must be positive, got {getattr(self, name)}")
-        require(1 <= self.encoder_steps_per_revolution <= 10**7,
-                f"robot encoder_steps_per_revolution must be in 1..10^7, got {self.encoder_steps_per_revolution}")
+        require(
+            1 <= self.encoder_steps_per_revolution <= 10**7,
+            f"robot encoder_steps_per_revolution must be in 1..10^7, got {self.encoder_steps_per_revolution}",
+        )
 
     def wheel_speeds(self, speed: float, turn_rate: float) -> tuple[float, float]:
         """Left and right wheel surface speeds (m/s) for body ``speed`` (m/s) and ``turn_rate`` (rad/s).

@@ -42,12 +42,23 @@ class EpisodeLog:
         self._writer.close()
         sidecars.write_truth(sidecars.truth_path(self.path), np.array(self._times), np.array(self._poses))
         maze = episode.maze
-        sidecars.write_map(sidecars.map_path(self.path), episode.walls.surfaces, episode.walls.corners,
-                           episode.config.laser.sensor_mapping(), corner_convex=episode.walls.corner_convex.tolist(),
-                           start_pose=episode.start_pose.tolist(),
-                           maze={"rows": maze.rows, "cols": maze.cols, "cell_size": maze.cell_size,
-                                 "wall_thickness": maze.wall_thickness, "text": maze.to_text()},
-                           parameters=to_mapping(episode.config), source="mazeslam/Maze-v0 episode")
+        sidecars.write_map(
+            sidecars.map_path(self.path),
+            episode.walls.surfaces,
+            episode.walls.corners,
+            episode.config.laser.sensor_mapping(),
+            corner_convex=episode.walls.corner_convex.tolist(),
+            start_pose=episode.start_pose.tolist(),
+            maze={
+                "rows": maze.rows,
+                "cols": maze.cols,
+                "cell_size": maze.cell_size,
+                "wall_thickness": maze.wall_thickness,
+                "text": maze.to_text(),
+            },
+            parameters=to_mapping(episode.config),
+            source="mazeslam/Maze-v0 episode",
+        )
 
 
 class RecordCourseLog(gym.Wrapper):
@@ -70,8 +81,9 @@ class RecordCourseLog(gym.Wrapper):
         self._finish()
         observation, info = self.env.reset(**kwargs)
         self.episode += 1
-        self._log = EpisodeLog(Path(self.path_template.format(episode=self.episode)),
-                               self.env.unwrapped.config.laser.beams)
+        self._log = EpisodeLog(
+            Path(self.path_template.format(episode=self.episode)), self.env.unwrapped.config.laser.beams
+        )
         self._log.write(0.0, np.zeros(2), observation["scan"], info["pose"])
         self.log_paths.append(self._log.path)
         return observation, info
@@ -123,8 +135,9 @@ class RecordVectorCourseLogs(gym.vector.VectorWrapper):
                 episode_log = self._logs[env]
                 if episode_log is None:
                     raise RuntimeError(f"env {env} has no episode log: reset() it first")
-                episode_log.write(info["time"][env], observation["odometry"][env], observation["scan"][env],
-                                  info["pose"][env])
+                episode_log.write(
+                    info["time"][env], observation["odometry"][env], observation["scan"][env], info["pose"][env]
+                )
         self._ended = terminated | truncated
         for env in np.flatnonzero(self._ended):
             self._finish(env)

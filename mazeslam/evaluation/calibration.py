@@ -130,14 +130,19 @@ def observations_by_record(run: LoadedRun, extractor: CornerExtractor | None):
         if isinstance(record, log.ScanRecord):
             assert extractor is not None  # None only for a log without scans
             features = extractor.extract(record.ranges)
-            yield (record.index, features.observation_array(), features.observation_covariances(),
-                   [o.kind for o in features.observations])
+            yield (
+                record.index,
+                features.observation_array(),
+                features.observation_covariances(),
+                [o.kind for o in features.observations],
+            )
         elif isinstance(record, log.LandmarkRecord):
             yield record.index, np.array([[record.range, record.bearing]]), np.zeros((1, 2, 2)), ["landmark"]
 
 
-def observation_residuals(run: LoadedRun, extractor: CornerExtractor | None, poses: np.ndarray, landmarks: np.ndarray,
-                          radius: float) -> Residuals:
+def observation_residuals(
+    run: LoadedRun, extractor: CornerExtractor | None, poses: np.ndarray, landmarks: np.ndarray, radius: float
+) -> Residuals:
     """Every observation's innovation against the landmark it most likely is: the nearest to where
     the pose puts it, within ``radius`` metres (farther ones are left out).
 
@@ -157,11 +162,19 @@ def observation_residuals(run: LoadedRun, extractor: CornerExtractor | None, pos
         predicted, _, _ = ekf.range_bearing(np.repeat(poses[record][None], len(landmarks), 0), landmarks)
         for k, nearest in enumerate(distances.argmin(axis=1)):
             if distances[k, nearest] <= radius:
-                rows.append((ekf.innovation(observed_all[k], predicted[nearest]), covariance_all[k], kinds[k],
-                             int(nearest), update))
+                rows.append(
+                    (
+                        ekf.innovation(observed_all[k], predicted[nearest]),
+                        covariance_all[k],
+                        kinds[k],
+                        int(nearest),
+                        update,
+                    )
+                )
     if not rows:
-        return Residuals(np.empty((0, 2)), np.empty((0, 2, 2)), np.empty(0, dtype=str), np.empty(0, int),
-                         np.empty(0, int))
+        return Residuals(
+            np.empty((0, 2)), np.empty((0, 2, 2)), np.empty(0, dtype=str), np.empty(0, int), np.empty(0, int)
+        )
     errors, covariances, kinds, which, updates = zip(*rows)
     return Residuals(np.array(errors), np.array(covariances), np.array(kinds), np.array(which), np.array(updates))
 
@@ -203,8 +216,11 @@ def _repeat_correlation(residuals: Residuals, kind: str) -> float:
     chosen = np.flatnonzero(residuals.kinds == kind)
     normalised = residuals.errors[chosen] / np.sqrt(np.diagonal(residuals.covariances[chosen], axis1=1, axis2=2))
     seen = {(int(residuals.landmarks[i]), int(residuals.updates[i])): n for n, i in enumerate(chosen)}
-    pairs = [(normalised[seen[(landmark, update - 1)]], normalised[n])
-             for (landmark, update), n in seen.items() if (landmark, update - 1) in seen]
+    pairs = [
+        (normalised[seen[(landmark, update - 1)]], normalised[n])
+        for (landmark, update), n in seen.items()
+        if (landmark, update - 1) in seen
+    ]
     if len(pairs) < 10:
         return 0.0
     before, after = (np.concatenate(side) for side in zip(*pairs))
@@ -236,31 +252,42 @@ class Calibration:
         """The measured settings as TOML lines, each saying where its number comes from."""
         noise, seen = self.motion.noise, self.observations
         where = f"measured by mazeslam calibrate on {self.source} against {self.reference}"
-        lines = [f"# {where}", "[fastslam]",
-                 f"sigmaX = {noise.sigmaX:.4g}             # m per sqrt(m): {self.motion_source}, "
-                 f"{self.motion.stretches} stretches, {self.motion.distance:.2f} m",
-                 f"sigmaTH = {noise.sigmaTH:.4g}            # rad per sqrt(rad) turned ({self.motion.turn:.1f} rad)",
-                 f"sigmaTH_drive = {noise.sigmaTH_drive:.4g}      # rad per sqrt(m) driven"]
+        lines = [
+            f"# {where}",
+            "[fastslam]",
+            f"sigmaX = {noise.sigmaX:.4g}             # m per sqrt(m): {self.motion_source}, "
+            f"{self.motion.stretches} stretches, {self.motion.distance:.2f} m",
+            f"sigmaTH = {noise.sigmaTH:.4g}            # rad per sqrt(rad) turned ({self.motion.turn:.1f} rad)",
+            f"sigmaTH_drive = {noise.sigmaTH_drive:.4g}      # rad per sqrt(m) driven",
+        ]
         if seen is None:
             lines.append(f"# observation noise not measured: {self.observation_problem}")
         else:
-            lines += [f"sigmaR = {seen.sigmaR:.3g}             # m: range noise beyond the corners' covariance "
-                      f"({seen.observations} observations)",
-                      f"sigmaB = {seen.sigmaB:.3g}             # rad: bearing noise beyond it"]
+            lines += [
+                f"sigmaR = {seen.sigmaR:.3g}             # m: range noise beyond the corners' covariance "
+                f"({seen.observations} observations)",
+                f"sigmaB = {seen.sigmaB:.3g}             # rad: bearing noise beyond it",
+            ]
         if self.range_noise is None:
             return lines
         lines += ["", "[corners]"]
         if seen is not None and seen.kind_scales:
-            lines += ["# width of the fits' covariance against the scatter x (1 + rho)/(1 - rho), rho the correlation"
-                      " of a landmark's errors from scan to scan: "
-                      + "; ".join(f"{kind} {seen.widths[kind]:.2f} x, rho {seen.correlations[kind]:.2f}"
-                                  for kind in seen.kind_scales),
-                      "covariance_scale = { "
-                      + ", ".join(f"{kind} = {scale:.3g}" for kind, scale in seen.kind_scales.items())
-                      + " }"]
-        lines += ["", "[corners.lines]",
-                  f"range_noise_std = {self.range_noise.std:.3g}   # m: the walls' scatter, "
-                  f"{self.range_noise.points} returns on {self.range_noise.lines} lines"]
+            lines += [
+                "# width of the fits' covariance against the scatter x (1 + rho)/(1 - rho), rho the correlation"
+                " of a landmark's errors from scan to scan: "
+                + "; ".join(
+                    f"{kind} {seen.widths[kind]:.2f} x, rho {seen.correlations[kind]:.2f}" for kind in seen.kind_scales
+                ),
+                "covariance_scale = { "
+                + ", ".join(f"{kind} = {scale:.3g}" for kind, scale in seen.kind_scales.items())
+                + " }",
+            ]
+        lines += [
+            "",
+            "[corners.lines]",
+            f"range_noise_std = {self.range_noise.std:.3g}   # m: the walls' scatter, "
+            f"{self.range_noise.points} returns on {self.range_noise.lines} lines",
+        ]
         return lines
 
 
@@ -279,13 +306,17 @@ def calibrate(run: LoadedRun, config, progress: bool = False) -> Calibration:
     else:
         result = slam_on_run(run, config, progress, laser=laser)
         reference, poses, landmarks = "the filter's path and map", result.mean_poses, result.landmarks
-    motion = measure_motion_noise(run.log_without_glitches(config.odometry.jump_tolerance),
-                                  run.truth if run.truth is not None else poses, laser)
-    motion_source = (f"{'laser odometry' if laser is not None else 'odometry'} against "
-                     f"{'truth' if run.truth is not None else reference}")
+    motion = measure_motion_noise(
+        run.log_without_glitches(config.odometry.jump_tolerance), run.truth if run.truth is not None else poses, laser
+    )
+    motion_source = (
+        f"{'laser odometry' if laser is not None else 'odometry'} against "
+        f"{'truth' if run.truth is not None else reference}"
+    )
     residuals = observation_residuals(run, extractor, poses, landmarks, config.evaluation.match_radius)
     try:
-        return Calibration(str(run.path), reference, range_noise, motion, motion_source,
-                           fit_observation_noise(residuals))
+        return Calibration(
+            str(run.path), reference, range_noise, motion, motion_source, fit_observation_noise(residuals)
+        )
     except ValueError as problem:
         return Calibration(str(run.path), reference, range_noise, motion, motion_source, None, str(problem))

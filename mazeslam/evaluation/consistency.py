@@ -17,11 +17,13 @@ POSE_BOUND_95 = float(chi2.ppf(0.95, 3))
 OBSERVATION_BOUND_95 = float(chi2.ppf(0.95, 2))
 
 #: One line for users: what the two numbers mean.
-EXPLANATION = ("NEES (pose error against truth, weighted by the filter's own covariance) and NIS (each "
-               "observation's surprise under the filter's prediction) measure whether the filter's stated "
-               "uncertainty is right: a consistent filter averages NEES 3 and NIS 2, and about 95 % of values "
-               f"fall inside the 95 % bounds ({POSE_BOUND_95:.2f} and {OBSERVATION_BOUND_95:.2f}); far larger "
-               "means overconfident.")
+EXPLANATION = (
+    "NEES (pose error against truth, weighted by the filter's own covariance) and NIS (each "
+    "observation's surprise under the filter's prediction) measure whether the filter's stated "
+    "uncertainty is right: a consistent filter averages NEES 3 and NIS 2, and about 95 % of values "
+    f"fall inside the 95 % bounds ({POSE_BOUND_95:.2f} and {OBSERVATION_BOUND_95:.2f}); far larger "
+    "means overconfident."
+)
 
 
 def summarise(values: np.ndarray, bound: float) -> dict[str, float | int | None]:
@@ -31,8 +33,12 @@ def summarise(values: np.ndarray, bound: float) -> dict[str, float | int | None]
     finite = finite[np.isfinite(finite)]
     if not len(finite):
         return {"mean": None, "median": None, "inside_95": None, "count": 0}
-    return {"mean": float(finite.mean()), "median": float(np.median(finite)),
-            "inside_95": float(np.mean(finite <= bound)), "count": int(len(finite))}
+    return {
+        "mean": float(finite.mean()),
+        "median": float(np.median(finite)),
+        "inside_95": float(np.mean(finite <= bound)),
+        "count": int(len(finite)),
+    }
 
 
 def nees_summary(nees: np.ndarray) -> dict:

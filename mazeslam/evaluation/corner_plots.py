@@ -36,8 +36,16 @@ def draw_scan(ax, features: ScanFeatures, mount=(0.0, 0.0), true_corners: np.nda
     for observation in features.observations:
         style = dict(KIND_STYLE[observation.kind])
         label = style.pop("label")
-        ax.plot(observation.x, observation.y, linestyle="none", markersize=7, markerfacecolor="none",
-                markeredgewidth=1.5, label=None if label in shown else label, **style)
+        ax.plot(
+            observation.x,
+            observation.y,
+            linestyle="none",
+            markersize=7,
+            markerfacecolor="none",
+            markeredgewidth=1.5,
+            label=None if label in shown else label,
+            **style,
+        )
         shown.add(label)
     if true_corners is not None and len(true_corners):
         ax.plot(true_corners[:, 0], true_corners[:, 1], "k+", markersize=9, label="true corners")
@@ -47,8 +55,9 @@ def draw_scan(ax, features: ScanFeatures, mount=(0.0, 0.0), true_corners: np.nda
     ax.set_ylabel("y left [m]")
 
 
-def plot_scan(path: str | Path, features: ScanFeatures, mount=(0.0, 0.0), title: str = "",
-              true_corners: np.ndarray | None = None) -> Path:
+def plot_scan(
+    path: str | Path, features: ScanFeatures, mount=(0.0, 0.0), title: str = "", true_corners: np.ndarray | None = None
+) -> Path:
     """Save the figure of one scan (robot frame) to ``path``."""
     fig, ax = plt.subplots(figsize=(8, 7))
     draw_scan(ax, features, mount, true_corners)

@@ -49,8 +49,9 @@ def _on_segments(points: np.ndarray, segments: np.ndarray) -> np.ndarray:
     return np.hypot(*(points[:, None, :] - closest).transpose(2, 0, 1)) < ON_FACE
 
 
-def observable_corners(sensor_pose, caster: RayCaster, step: float, corners, faces, convex, params: CornerParams,
-                       max_range: float) -> np.ndarray:
+def observable_corners(
+    sensor_pose, caster: RayCaster, step: float, corners, faces, convex, params: CornerParams, max_range: float
+) -> np.ndarray:
     """(K,) which true corners a perfect extractor could find from ``sensor_pose`` (x, y, heading).
 
     ``caster`` casts the scan's beams (noise-free) against the walls, ``step`` radians apart;
@@ -79,14 +80,16 @@ def observable_corners(sensor_pose, caster: RayCaster, step: float, corners, fac
             normal = np.array([face[1] - face[3], face[2] - face[0]]) / np.hypot(face[2] - face[0], face[3] - face[1])
             spacing = distance * step / max(abs(normal @ to_corner) / distance, 1e-9)
             result[k] = spacing <= params.max_end_spacing and _background_beyond(
-                points, on_face.any(axis=1), origin, corner, distance)
+                points, on_face.any(axis=1), origin, corner, distance
+            )
     return result
 
 
 def caster_walls(caster: RayCaster) -> np.ndarray:
     """The wall segments (W, 4) a ``RayCaster`` was built from."""
-    return np.column_stack([caster.start_x, caster.start_y, caster.start_x + caster.vector_x,
-                            caster.start_y + caster.vector_y])
+    return np.column_stack(
+        [caster.start_x, caster.start_y, caster.start_x + caster.vector_x, caster.start_y + caster.vector_y]
+    )
 
 
 def _background_beyond(points, on_corner_faces, origin, corner, distance) -> bool:
@@ -118,8 +121,9 @@ def evaluate_log(log_path: str | Path, params: CornerParams | None = None, toler
         found_world = transform_points(truth[index], found) if len(found) else found
         gaps = np.hypot(*(found_world[:, None, :] - corners[None]).transpose(2, 0, 1))  # (D, K)
         sensor_pose = compose(truth[index], [geometry.mount_x, geometry.mount_y, 0.0])
-        observable = observable_corners(sensor_pose, caster, extractor.step, corners, faces, convex, params,
-                                        world["sensor"]["max_range"] - 0.05)
+        observable = observable_corners(
+            sensor_pose, caster, extractor.step, corners, faces, convex, params, world["sensor"]["max_range"] - 0.05
+        )
         detections += len(found)
         if len(found):
             nearest = gaps.min(axis=1)

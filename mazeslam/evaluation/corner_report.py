@@ -34,13 +34,21 @@ class CornerReport:
     features: list[ScanFeatures]
 
     @classmethod
-    def from_log(cls, path, config_path=None, mode: str | None = None, sensor: SensorOverrides | None = None,
-                 progress: bool = True) -> CornerReport:
+    def from_log(
+        cls,
+        path,
+        config_path=None,
+        mode: str | None = None,
+        sensor: SensorOverrides | None = None,
+        progress: bool = True,
+    ) -> CornerReport:
         params = with_changes(load_toml(CornerParams, config_path) if config_path else CornerParams(), mode=mode)
         scans = load_scans(path, sensor)
         extractor = CornerExtractor(scans.geometry, scans.n_beams, params)
-        features = [extractor.extract(ranges)
-                    for ranges in tqdm(scans.ranges, desc="corners", unit="scan", disable=not progress)]
+        features = [
+            extractor.extract(ranges)
+            for ranges in tqdm(scans.ranges, desc="corners", unit="scan", disable=not progress)
+        ]
         return cls(scans, params, features)
 
     def summary(self) -> str:
@@ -49,14 +57,16 @@ class CornerReport:
         lines = sum(len(f.segments) for f in self.features)
         g = self.scans.geometry
         per_kind = ", ".join(f"{kind} {count / n:.2f}" for kind, count in sorted(kinds.items())) or "none"
-        return "\n".join([
-            f"{self.scans.source}: {n} scans of {self.scans.n_beams} beams",
-            f"  beam geometry    beam 0 at {g.first_beam_angle:+.4f} rad, direction {g.direction:+d}, "
-            f"field of view {g.field_of_view:.4f} rad, sensor at ({g.mount_x:.3f}, {g.mount_y:.3f}) m "
-            f"[{self.scans.geometry_origin}]",
-            f"  mode             {self.params.mode}",
-            f"  per scan         {lines / n:.2f} lines; observations: {per_kind}",
-        ])
+        return "\n".join(
+            [
+                f"{self.scans.source}: {n} scans of {self.scans.n_beams} beams",
+                f"  beam geometry    beam 0 at {g.first_beam_angle:+.4f} rad, direction {g.direction:+d}, "
+                f"field of view {g.field_of_view:.4f} rad, sensor at ({g.mount_x:.3f}, {g.mount_y:.3f}) m "
+                f"[{self.scans.geometry_origin}]",
+                f"  mode             {self.params.mode}",
+                f"  per scan         {lines / n:.2f} lines; observations: {per_kind}",
+            ]
+        )
 
     def convention_warning(self) -> str | None:
         """For a course log whose beam geometry is not from a sidecar: a warning when another
@@ -67,13 +77,16 @@ class CornerReport:
         return convention_warning(run.log, self.scans.geometry, self.params.min_range, self.params.max_range)
 
     def _title(self, index: int) -> str:
-        return (f"{Path(self.scans.source).name}: scan {index} (record {self.scans.records[index]}, "
-                f"t = {self.scans.times[index]:.2f} s)")
+        return (
+            f"{Path(self.scans.source).name}: scan {index} (record {self.scans.records[index]}, "
+            f"t = {self.scans.times[index]:.2f} s)"
+        )
 
     def plot(self, index: int, path) -> Path:
         if index >= len(self.features):
-            raise ValueError(f"scan {index} does not exist: the log has {len(self.features)} scans "
-                             f"(0..{len(self.features) - 1})")
+            raise ValueError(
+                f"scan {index} does not exist: the log has {len(self.features)} scans (0..{len(self.features) - 1})"
+            )
         mount = (self.scans.geometry.mount_x, self.scans.geometry.mount_y)
         return plot_scan(path, self.features[index], mount, self._title(index), self._true_corners(index))
 
@@ -110,24 +123,46 @@ class CornerReport:
         scans = []
         for index, features in enumerate(self.features):
             beams = features.beams
-            scans.append({
-                "scan": index,
-                "record": int(self.scans.records[index]),
-                "t": float(self.scans.times[index]),
-                "lines": [{"r": s.r, "alpha": s.alpha, "start": s.start.tolist(), "end": s.end.tolist(),
-                           "first_beam": int(beams[s.first]), "last_beam": int(beams[s.last])}
-                          for s in features.segments],
-                "observations": [{"range": o.range, "bearing": o.bearing, "x": o.x, "y": o.y, "kind": o.kind,
-                                  "covariance_xy": o.covariance_xy.tolist(), "beam": o.beam}
-                                 for o in features.observations],
-            })
-        return {"source": self.scans.source, "frame": "lines: sensor frame; observations: robot frame",
-                "beam_geometry": g.to_dict(), "parameters": jsonable(dataclasses.asdict(self.params)),
-                "scans": scans}
+            scans.append(
+                {
+                    "scan": index,
+                    "record": int(self.scans.records[index]),
+                    "t": float(self.scans.times[index]),
+                    "lines": [
+                        {
+                            "r": s.r,
+                            "alpha": s.alpha,
+                            "start": s.start.tolist(),
+                            "end": s.end.tolist(),
+                            "first_beam": int(beams[s.first]),
+                            "last_beam": int(beams[s.last]),
+                        }
+                        for s in features.segments
+                    ],
+                    "observations": [
+                        {
+                            "range": o.range,
+                            "bearing": o.bearing,
+                            "x": o.x,
+                            "y": o.y,
+                            "kind": o.kind,
+                            "covariance_xy": o.covariance_xy.tolist(),
+                            "beam": o.beam,
+                        }
+                        for o in features.observations
+                    ],
+                }
+            )
+        return {
+            "source": self.scans.source,
+            "frame": "lines: sensor frame; observations: robot frame",
+            "beam_geometry": g.to_dict(),
+            "parameters": jsonable(dataclasses.asdict(self.params)),
+            "scans": scans,
+        }
 
     def write_json(self, path) -> Path:
         path = Path(path)
         path.parent.mkdir(parents=True, exist_ok=True)
         path.write_text(json.dumps(self.to_dict(), allow_nan=False) + "\n")
         return path
-

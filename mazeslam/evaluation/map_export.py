@@ -34,9 +34,14 @@ def choose_resolution(extent: float) -> float:
     return resolution
 
 
-def occupancy_from_scans(course_log: log.CourseLog, poses: np.ndarray, geometry: BeamGeometry,
-                         min_range: float = 0.0, max_range: float = math.inf,
-                         resolution: float | None = None) -> OccupancyMap:
+def occupancy_from_scans(
+    course_log: log.CourseLog,
+    poses: np.ndarray,
+    geometry: BeamGeometry,
+    min_range: float = 0.0,
+    max_range: float = math.inf,
+    resolution: float | None = None,
+) -> OccupancyMap:
     """The occupancy map of ``course_log``'s scans placed by ``poses`` (R, 3), one per record.
 
     Ranges below ``min_range`` (and 0, no return) are left out; a range above ``max_range`` clears
@@ -99,15 +104,24 @@ def write_landmarks(path: str | Path, landmarks: np.ndarray, covariances: np.nda
     """``landmarks.csv``: one row per landmark, ``x,y,cov_xx,cov_xy,cov_yy`` (world frame, m and m^2)."""
     path = Path(path)
     rows = ["x,y,cov_xx,cov_xy,cov_yy"]
-    rows += [f"{x:.6f},{y:.6f},{c[0, 0]:.9g},{c[0, 1]:.9g},{c[1, 1]:.9g}"
-             for (x, y), c in zip(np.asarray(landmarks).reshape(-1, 2), np.asarray(covariances).reshape(-1, 2, 2))]
+    rows += [
+        f"{x:.6f},{y:.6f},{c[0, 0]:.9g},{c[0, 1]:.9g},{c[1, 1]:.9g}"
+        for (x, y), c in zip(np.asarray(landmarks).reshape(-1, 2), np.asarray(covariances).reshape(-1, 2, 2))
+    ]
     path.write_text("\n".join(rows) + "\n")
     return path
 
 
-def export_map(out_dir: str | Path, course_log: log.CourseLog, poses: np.ndarray, geometry: BeamGeometry,
-               landmarks: np.ndarray, covariances: np.ndarray, min_range: float = 0.0,
-               max_range: float = math.inf) -> dict[str, Path]:
+def export_map(
+    out_dir: str | Path,
+    course_log: log.CourseLog,
+    poses: np.ndarray,
+    geometry: BeamGeometry,
+    landmarks: np.ndarray,
+    covariances: np.ndarray,
+    min_range: float = 0.0,
+    max_range: float = math.inf,
+) -> dict[str, Path]:
     """Write ``occupancy.pgm``/``.yaml``/``.png`` (when the log has scans) and ``landmarks.csv``
     into ``out_dir``; returns their paths by name."""
     out_dir = Path(out_dir)

@@ -85,14 +85,23 @@ def relative_pose_error(estimate: np.ndarray, truth: np.ndarray, delta: float, u
     else:
         raise ValueError(f"unit must be 'm' or 'records', got {unit!r}")
     if len(ids) < 2:
-        return {"trans_rmse": float("nan"), "trans_mean": float("nan"), "trans_max": float("nan"),
-                "rot_rmse": float("nan"), "pairs": 0}
+        return {
+            "trans_rmse": float("nan"),
+            "trans_mean": float("nan"),
+            "trans_max": float("nan"),
+            "rot_rmse": float("nan"),
+            "pairs": 0,
+        }
     i, j = ids[:-1], ids[1:]
     error = relative(relative(truth[i], truth[j]), relative(estimate[i], estimate[j]))
     translation = np.hypot(error[:, 0], error[:, 1])
-    return {"trans_rmse": float(np.sqrt(np.mean(translation**2))), "trans_mean": float(translation.mean()),
-            "trans_max": float(translation.max()), "rot_rmse": float(np.sqrt(np.mean(error[:, 2] ** 2))),
-            "pairs": int(len(i))}
+    return {
+        "trans_rmse": float(np.sqrt(np.mean(translation**2))),
+        "trans_mean": float(translation.mean()),
+        "trans_max": float(translation.max()),
+        "rot_rmse": float(np.sqrt(np.mean(error[:, 2] ** 2))),
+        "pairs": int(len(i)),
+    }
 
 
 def normalized_estimation_error(estimate: np.ndarray, covariances: np.ndarray, truth: np.ndarray) -> np.ndarray:
@@ -118,8 +127,12 @@ def map_error(landmarks: np.ndarray, true_landmarks: np.ndarray, match_radius: f
     landmarks = np.asarray(landmarks, dtype=float).reshape(-1, 2)
     true_landmarks = np.asarray(true_landmarks, dtype=float).reshape(-1, 2)
     if len(landmarks) == 0 or len(true_landmarks) == 0:
-        return {"rmse": float("nan"), "matched": 0, "precision": float("nan") if len(landmarks) == 0 else 0.0,
-                "recall": 0.0}
+        return {
+            "rmse": float("nan"),
+            "matched": 0,
+            "precision": float("nan") if len(landmarks) == 0 else 0.0,
+            "recall": 0.0,
+        }
     distances = np.hypot(*(landmarks[:, None, :] - true_landmarks[None]).transpose(2, 0, 1))
     rows, cols = linear_sum_assignment(distances)
     close = distances[rows, cols] <= match_radius

@@ -95,8 +95,11 @@ def laser_stretch_errors(laser: LaserOdometry, truth: np.ndarray) -> np.ndarray:
     truth = np.asarray(truth, dtype=float)
     if truth.shape != (len(laser.increments), 3):
         raise ValueError(f"truth must hold one pose per scan: {len(laser.increments)} x 3, got {truth.shape}")
-    rows = [_error_row(math.hypot(step[0], step[1]), abs(step[2]), step, relative(truth[k - 1], truth[k]))
-            for k, step in enumerate(laser.increments) if k]
+    rows = [
+        _error_row(math.hypot(step[0], step[1]), abs(step[2]), step, relative(truth[k - 1], truth[k]))
+        for k, step in enumerate(laser.increments)
+        if k
+    ]
     return np.array(rows).reshape(-1, 4)
 
 
@@ -104,8 +107,9 @@ def _error_row(moved: float, turned: float, measured_step: np.ndarray, true_step
     """``(D, T, e_along, e_theta)`` of one stretch: the position error along the direction the
     measured step travelled (m) and the heading error (rad)."""
     heading = math.atan2(measured_step[1], measured_step[0]) if moved > 0 else 0.0
-    along = ((true_step[0] - measured_step[0]) * math.cos(heading)
-             + (true_step[1] - measured_step[1]) * math.sin(heading))
+    along = (true_step[0] - measured_step[0]) * math.cos(heading) + (true_step[1] - measured_step[1]) * math.sin(
+        heading
+    )
     return moved, turned, along, wrap_angle(true_step[2] - measured_step[2])
 
 
@@ -114,8 +118,9 @@ def measure_odometry_noise(course_log: CourseLog, truth: np.ndarray) -> Measured
     return fit_noise(stretch_errors(course_log, truth))
 
 
-def measure_motion_noise(course_log: CourseLog, reference: np.ndarray,
-                         laser: LaserOdometry | None = None) -> MeasuredOdometryNoise:
+def measure_motion_noise(
+    course_log: CourseLog, reference: np.ndarray, laser: LaserOdometry | None = None
+) -> MeasuredOdometryNoise:
     """The noise of whatever moves the filter, against ``reference`` poses (R, 3) at every record
     (the truth, or a filter's path): the laser odometry's when given, else the odometry's."""
     if laser is not None:

@@ -11,8 +11,14 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
 
-def plot_run(path: str | Path, walls: np.ndarray, corners: np.ndarray, truth: np.ndarray,
-             estimates: dict[str, np.ndarray], title: str = "") -> Path:
+def plot_run(
+    path: str | Path,
+    walls: np.ndarray,
+    corners: np.ndarray,
+    truth: np.ndarray,
+    estimates: dict[str, np.ndarray],
+    title: str = "",
+) -> Path:
     """Save a top-down figure of a run to ``path`` (PNG, PDF, ... by suffix).
 
     Args:

@@ -72,9 +72,19 @@ def error_table(estimates: dict[str, np.ndarray], truth: np.ndarray) -> pd.DataF
         raw = absolute_trajectory_error(poses, truth)
         aligned = absolute_trajectory_error(poses, truth, align=True)
         rpe = relative_pose_error(poses, truth, RPE_DISTANCE)
-        rows.append({"estimator": name, "ate_rmse": raw["rmse"], "ate_mean": raw["mean"], "ate_max": raw["max"],
-                     "aligned_rmse": aligned["rmse"], "aligned_mean": aligned["mean"], "aligned_max": aligned["max"],
-                     "rpe_trans_rmse": rpe["trans_rmse"], "rpe_rot_rmse": rpe["rot_rmse"]})
+        rows.append(
+            {
+                "estimator": name,
+                "ate_rmse": raw["rmse"],
+                "ate_mean": raw["mean"],
+                "ate_max": raw["max"],
+                "aligned_rmse": aligned["rmse"],
+                "aligned_mean": aligned["mean"],
+                "aligned_max": aligned["max"],
+                "rpe_trans_rmse": rpe["trans_rmse"],
+                "rpe_rot_rmse": rpe["rot_rmse"],
+            }
+        )
     return pd.DataFrame(rows).set_index("estimator")
 
 
@@ -94,11 +104,13 @@ def score_run(run: LoadedRun, result: SlamResult, match_radius: float = 0.05) ->
     nees = normalized_estimation_error(mean, result.pose_covariances[records], truth)
     table["mean_nees"] = table["median_nees"] = np.nan
     summary = nees_summary(nees)
-    table.loc[FILTER_MEAN, ["mean_nees", "median_nees"]] = [np.nan if summary[key] is None else summary[key]
-                                                             for key in ("mean", "median")]
+    table.loc[FILTER_MEAN, ["mean_nees", "median_nees"]] = [
+        np.nan if summary[key] is None else summary[key] for key in ("mean", "median")
+    ]
     alignment = align_se2(mean, truth)
     aligned = apply_se2(alignment, result.landmarks) if len(result.landmarks) else result.landmarks
-    map_errors = {"as estimated": map_error(result.landmarks, run.true_corners, match_radius),
-                  "aligned": map_error(aligned, run.true_corners, match_radius)}
+    map_errors = {
+        "as estimated": map_error(result.landmarks, run.true_corners, match_radius),
+        "aligned": map_error(aligned, run.true_corners, match_radius),
+    }
     return RunScore(records, table, nees, summary, alignment, map_errors)
-

@@ -34,23 +34,41 @@ def consistency(result: SlamResult) -> dict:
     else:
         nearest = float("nan")
     steps = np.hypot(*np.diff(result.mean_poses[:, :2], axis=0).T) if len(result.mean_poses) > 1 else np.zeros(1)
-    return {"landmarks": len(landmarks), "reobserved": int((seen >= 2).sum()),
-            "median_observations": float(np.median(seen)) if len(seen) else 0.0,
-            "nearest_landmarks_m": nearest, "largest_path_step_m": float(steps.max())}
+    return {
+        "landmarks": len(landmarks),
+        "reobserved": int((seen >= 2).sum()),
+        "median_observations": float(np.median(seen)) if len(seen) else 0.0,
+        "nearest_landmarks_m": nearest,
+        "largest_path_step_m": float(steps.max()),
+    }
 
 
-def scan_points_world(course_log: log.CourseLog, poses: np.ndarray, geometry: BeamGeometry,
-                      min_range: float = 0.0, max_range: float = np.inf) -> np.ndarray:
+def scan_points_world(
+    course_log: log.CourseLog,
+    poses: np.ndarray,
+    geometry: BeamGeometry,
+    min_range: float = 0.0,
+    max_range: float = np.inf,
+) -> np.ndarray:
     """Every scan's returns within [min_range, max_range] (Q, 2), placed in the world by the
     given poses (R, 3) of the records."""
-    chunks = [transform_points(poses[index], geometry.returns(course_log.values[index], min_range, max_range))
-              for index in np.flatnonzero(course_log.is_scan)]
+    chunks = [
+        transform_points(poses[index], geometry.returns(course_log.values[index], min_range, max_range))
+        for index in np.flatnonzero(course_log.is_scan)
+    ]
     return np.concatenate(chunks) if chunks else np.empty((0, 2))
 
 
-def plot_slam(path, result: SlamResult, points: np.ndarray, truth: np.ndarray | None = None,
-              walls: np.ndarray | None = None, title: str = "", true_landmarks: np.ndarray | None = None,
-              truth_label: str = "true path") -> Path:
+def plot_slam(
+    path,
+    result: SlamResult,
+    points: np.ndarray,
+    truth: np.ndarray | None = None,
+    walls: np.ndarray | None = None,
+    title: str = "",
+    true_landmarks: np.ndarray | None = None,
+    truth_label: str = "true path",
+) -> Path:
     """The exercise's figure: best particle's map with 2-sigma ellipses, particles in red, scan
     points in black, the estimated path; with truth, the true path (``truth_label``: a reference
     path is not truth), walls and landmarks too."""
@@ -63,16 +81,29 @@ def plot_slam(path, result: SlamResult, points: np.ndarray, truth: np.ndarray | 
     if truth is not None:
         ax.plot(truth[:, 0], truth[:, 1], color="tab:green", linewidth=1.2, label=truth_label)
     if true_landmarks is not None and len(true_landmarks):
-        ax.plot(true_landmarks[:, 0], true_landmarks[:, 1], "o", color="tab:green", markersize=4,
-                markerfacecolor="none", label="true landmarks")
+        ax.plot(
+            true_landmarks[:, 0],
+            true_landmarks[:, 1],
+            "o",
+            color="tab:green",
+            markersize=4,
+            markerfacecolor="none",
+            label="true landmarks",
+        )
     ax.plot(result.mean_poses[:, 0], result.mean_poses[:, 1], color="tab:blue", linewidth=1.2, label="FastSLAM path")
     particles = result.filter.poses
     ax.plot(particles[:, 0], particles[:, 1], ".", color="red", markersize=3, label="particles")
     for mean, covariance in zip(result.landmarks, result.landmark_covariances):
         ax.add_patch(_ellipse(mean, covariance))
     if len(result.landmarks):
-        ax.plot(result.landmarks[:, 0], result.landmarks[:, 1], "+", color="tab:purple", markersize=8,
-                label="landmarks (2 sigma)")
+        ax.plot(
+            result.landmarks[:, 0],
+            result.landmarks[:, 1],
+            "+",
+            color="tab:purple",
+            markersize=8,
+            label="landmarks (2 sigma)",
+        )
     ax.set_aspect("equal")
     ax.set_xlabel("x [m]")
     ax.set_ylabel("y [m]")
@@ -86,10 +117,19 @@ def _ellipse(mean, covariance, sigmas: float = 2.0) -> Ellipse:
     return Ellipse(mean, width, height, angle=angle, fill=False, color="tab:purple", linewidth=0.8)
 
 
-def animate_slam(path, result: SlamResult, points: np.ndarray, truth: np.ndarray | None = None,
-                 walls: np.ndarray | None = None, frames_per_second: int = 10, scan_at: ScanSource | None = None,
-                 title: str = "", progress: bool = False, video: bool | None = None,
-                 truth_label: str = "true path") -> Path:
+def animate_slam(
+    path,
+    result: SlamResult,
+    points: np.ndarray,
+    truth: np.ndarray | None = None,
+    walls: np.ndarray | None = None,
+    frames_per_second: int = 10,
+    scan_at: ScanSource | None = None,
+    title: str = "",
+    progress: bool = False,
+    video: bool | None = None,
+    truth_label: str = "true path",
+) -> Path:
     """The run as an animation, one frame per snapshot (``SlamView``: particles, map so far, path so
     far, the current scan and its corners from ``scan_at``): MP4 when ffmpeg is available (``path``
     with suffix .mp4), GIF otherwise; returns the path written. A progress bar with ``progress``."""
@@ -106,8 +146,12 @@ def write_outputs(out_dir, result: SlamResult, extra: dict) -> dict[str, Path]:
     with covariances, run facts; strict JSON)."""
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
-    paths = {"trajectory": out_dir / "trajectory.csv", "best_trajectory": out_dir / "best_trajectory.csv",
-             "map": out_dir / "map.json", "tum": out_dir / "trajectory.tum"}
+    paths = {
+        "trajectory": out_dir / "trajectory.csv",
+        "best_trajectory": out_dir / "best_trajectory.csv",
+        "map": out_dir / "map.json",
+        "tum": out_dir / "trajectory.tum",
+    }
     sidecars.write_trajectory(paths["trajectory"], result.times, result.mean_poses, result.pose_covariances)
     sidecars.write_tum(paths["tum"], result.times, result.mean_poses)
     sidecars.write_truth(paths["best_trajectory"], result.times, result.best_poses)

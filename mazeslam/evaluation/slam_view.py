@@ -27,22 +27,41 @@ ScanSource = Callable[[int], tuple[np.ndarray, np.ndarray]]
 class SlamView:
     """A figure of the filter's state that ``show`` updates in place."""
 
-    def __init__(self, times: np.ndarray, mean_poses: np.ndarray, extent: np.ndarray, title: str = "",
-                 truth: np.ndarray | None = None, walls: np.ndarray | None = None, scan_at: ScanSource | None = None,
-                 figure=None, truth_label: str = "true path"):
+    def __init__(
+        self,
+        times: np.ndarray,
+        mean_poses: np.ndarray,
+        extent: np.ndarray,
+        title: str = "",
+        truth: np.ndarray | None = None,
+        walls: np.ndarray | None = None,
+        scan_at: ScanSource | None = None,
+        figure=None,
+        truth_label: str = "true path",
+    ):
         self.times, self.mean_poses, self.truth, self.scan_at, self.title = times, mean_poses, truth, scan_at, title
         self.figure = figure if figure is not None else plt.figure(figsize=(8.5, 6))
         self.figure.clf()
         ax = self.ax = self.figure.add_subplot(111)
         if walls is not None and len(walls):
-            ax.add_collection(LineCollection(list(np.asarray(walls).reshape(-1, 2, 2)), colors="0.7", linewidths=1.0,
-                                             label="walls"))
-        self.truth_line = ax.plot([], [], color="tab:green", linewidth=1.0, label=truth_label)[0] \
-            if truth is not None else None
+            ax.add_collection(
+                LineCollection(list(np.asarray(walls).reshape(-1, 2, 2)), colors="0.7", linewidths=1.0, label="walls")
+            )
+        self.truth_line = (
+            ax.plot([], [], color="tab:green", linewidth=1.0, label=truth_label)[0] if truth is not None else None
+        )
         self.path_line = ax.plot([], [], color="tab:blue", linewidth=1.2, label="estimated path")[0]
         self.scan_points = ax.plot([], [], ".", color="black", markersize=2, label="current scan")[0]
-        self.corners = ax.plot([], [], "o", color="tab:green", markersize=7, markerfacecolor="none",
-                               markeredgewidth=1.5, label="its corners")[0]
+        self.corners = ax.plot(
+            [],
+            [],
+            "o",
+            color="tab:green",
+            markersize=7,
+            markerfacecolor="none",
+            markeredgewidth=1.5,
+            label="its corners",
+        )[0]
         self.particles = ax.plot([], [], ".", color="red", markersize=3, label="particles")[0]
         self.landmarks = ax.plot([], [], "+", color="tab:purple", markersize=8, label="map (best particle)")[0]
         self.ellipses: list = []
@@ -56,8 +75,14 @@ class SlamView:
         ax.legend(loc="upper left", bbox_to_anchor=(1.02, 1.0), fontsize=8)
         self.figure.subplots_adjust(left=0.09, right=0.75, bottom=0.09, top=0.9)
 
-    def show(self, index: int, particles: np.ndarray, landmarks: np.ndarray,
-             covariances: np.ndarray | None = None, path: np.ndarray | None = None) -> None:
+    def show(
+        self,
+        index: int,
+        particles: np.ndarray,
+        landmarks: np.ndarray,
+        covariances: np.ndarray | None = None,
+        path: np.ndarray | None = None,
+    ) -> None:
         """Set the figure to record ``index``: particle poses (P, 3), landmarks (L, 2) and their
         covariances (L, 2, 2) (no ellipses when None); ``path`` (N, >=2) the estimated path so far
         (default: ``mean_poses`` up to ``index``)."""
@@ -70,8 +95,11 @@ class SlamView:
         self.landmarks.set_data(landmarks[:, 0], landmarks[:, 1])
         for ellipse in self.ellipses:
             ellipse.remove()
-        self.ellipses = [] if covariances is None else [
-            self.ax.add_patch(ellipse_of(mean, covariance)) for mean, covariance in zip(landmarks, covariances)]
+        self.ellipses = (
+            []
+            if covariances is None
+            else [self.ax.add_patch(ellipse_of(mean, covariance)) for mean, covariance in zip(landmarks, covariances)]
+        )
         points, corners = self.scan_at(index) if self.scan_at is not None else (np.empty((0, 2)), np.empty((0, 2)))
         self.scan_points.set_data(points[:, 0], points[:, 1])
         self.corners.set_data(corners[:, 0], corners[:, 1])
@@ -124,8 +152,14 @@ def ffmpeg_path() -> str | None:
         return shutil.which("ffmpeg")
 
 
-def save_animation(view: SlamView, frames: list, path: str | Path, frames_per_second: int = 10,
-                   progress: bool = True, video: bool | None = None) -> Path:
+def save_animation(
+    view: SlamView,
+    frames: list,
+    path: str | Path,
+    frames_per_second: int = 10,
+    progress: bool = True,
+    video: bool | None = None,
+) -> Path:
     """Draw ``frames`` (each the arguments of ``view.show``) into ``path``: an MP4 (suffix .mp4) when
     ffmpeg is available and ``video`` is not False, a GIF otherwise. Returns the path written."""
     from matplotlib.animation import FFMpegWriter, FuncAnimation, PillowWriter

@@ -105,8 +105,11 @@ def load_sweep(path: str | Path) -> Sweep:
     if not isinstance(grid, dict) or not all(isinstance(v, list) and v for v in grid.values()):
         raise ConfigError(f"{path}: [grid] must map setting names to non-empty lists of values")
     seeds = document.get("seeds", [0])
-    if not isinstance(seeds, list) or not seeds or not all(
-            isinstance(s, int) and not isinstance(s, bool) and 0 <= s <= MAX_SEED for s in seeds):
+    if (
+        not isinstance(seeds, list)
+        or not seeds
+        or not all(isinstance(s, int) and not isinstance(s, bool) and 0 <= s <= MAX_SEED for s in seeds)
+    ):
         raise ConfigError(f"{path}: seeds must be a non-empty list of integers in 0..{MAX_SEED}")
     for key in ("name", "maze", "simulation_config", "slam_config"):
         if key in document and not isinstance(document[key], str):
@@ -129,10 +132,16 @@ def load_sweep(path: str | Path) -> Sweep:
         return str(candidate if candidate.is_absolute() or candidate.exists() else base / candidate)
 
     maze = document.get("maze", "random")
-    sweep = Sweep(name=document.get("name", path.stem), grid=grid, seeds=seeds,
-                  maze=maze if maze == "random" else resolve("maze"),
-                  simulation_config=resolve("simulation_config"), slam_config=resolve("slam_config"),
-                  duration=document.get("duration"), source=str(path))
+    sweep = Sweep(
+        name=document.get("name", path.stem),
+        grid=grid,
+        seeds=seeds,
+        maze=maze if maze == "random" else resolve("maze"),
+        simulation_config=resolve("simulation_config"),
+        slam_config=resolve("slam_config"),
+        duration=document.get("duration"),
+        source=str(path),
+    )
     for run in sweep.runs()[: max(1, len(sweep.seeds))]:
         try:
             configure(sweep, run["settings"])
@@ -185,9 +194,14 @@ def replace_setting(config, place: str, value):
 
 def run_id(sweep: Sweep, run: dict) -> str:
     """A stable name for one run: a hash of its settings, seed and the sweep's base settings."""
-    identity = {"settings": run["settings"], "seed": run["seed"], "maze": sweep.maze, "duration": sweep.duration,
-                "simulation": dataclasses.asdict(sweep.base_simulation()),
-                "slam": dataclasses.asdict(sweep.base_slam())}
+    identity = {
+        "settings": run["settings"],
+        "seed": run["seed"],
+        "maze": sweep.maze,
+        "duration": sweep.duration,
+        "simulation": dataclasses.asdict(sweep.base_simulation()),
+        "slam": dataclasses.asdict(sweep.base_slam()),
+    }
     text = json.dumps(identity, sort_keys=True, default=str)
     return hashlib.sha1(text.encode()).hexdigest()[:16]
 
@@ -198,8 +212,9 @@ def execute_run(sweep: Sweep, run: dict, maps_folder: str | None = None) -> dict
     seed = run["seed"]
     slam_config = dataclasses.replace(slam_config, fastslam=dataclasses.replace(slam_config.fastslam, seed=seed))
     with tempfile.TemporaryDirectory() as folder:
-        simulated = simulate(Path(folder) / "run.log", simulation_config, sweep.maze, seed, sweep.duration,
-                             progress=False)
+        simulated = simulate(
+            Path(folder) / "run.log", simulation_config, sweep.maze, seed, sweep.duration, progress=False
+        )
         loaded = load_run(simulated.log_path, slam_config.sensor)
     started = time.perf_counter()
     result = slam_on_run(loaded, slam_config, progress=False)
@@ -213,33 +228,46 @@ def execute_run(sweep: Sweep, run: dict, maps_folder: str | None = None) -> dict
     particles = slam_config.fastslam.NPARTICLES
     reports = result.reports
     row = {
-        "run_id": run_id(sweep, run), "seed": seed, **{k: cell_label(v) for k, v in run["settings"].items()},
-        "ate_rmse": filter_row["ate_rmse"], "ate_aligned_rmse": filter_row["aligned_rmse"],
-        "reckoning_ate_rmse": reckoning_row["ate_rmse"], "reckoning_ate_aligned_rmse": reckoning_row["aligned_rmse"],
+        "run_id": run_id(sweep, run),
+        "seed": seed,
+        **{k: cell_label(v) for k, v in run["settings"].items()},
+        "ate_rmse": filter_row["ate_rmse"],
+        "ate_aligned_rmse": filter_row["aligned_rmse"],
+        "reckoning_ate_rmse": reckoning_row["ate_rmse"],
+        "reckoning_ate_aligned_rmse": reckoning_row["aligned_rmse"],
         **(optimum_columns(loaded, slam_config, score) or {}),
-        "rpe_trans_rmse": filter_row["rpe_trans_rmse"], "rpe_rot_rmse": filter_row["rpe_rot_rmse"],
-        "map_rmse": score.map_errors["as estimated"]["rmse"], "map_aligned_rmse": aligned_map_error["rmse"],
-        "map_precision": aligned_map_error["precision"], "map_recall": aligned_map_error["recall"],
+        "rpe_trans_rmse": filter_row["rpe_trans_rmse"],
+        "rpe_rot_rmse": filter_row["rpe_rot_rmse"],
+        "map_rmse": score.map_errors["as estimated"]["rmse"],
+        "map_aligned_rmse": aligned_map_error["rmse"],
+        "map_precision": aligned_map_error["precision"],
+        "map_recall": aligned_map_error["recall"],
         "landmarks": len(result.landmarks),
         "spurious_landmarks": len(result.landmarks) - aligned_map_error["matched"],
         "true_corners": len(loaded.true_corners),
         "ess_median": float(np.median([r.effective_sample_size for r in reports])) if reports else np.nan,
         "new_per_scan": float(np.mean([r.new for r in reports])) / particles if reports else np.nan,
         "ambiguous_per_scan": float(np.mean([r.ambiguous for r in reports])) / particles if reports else np.nan,
-        "median_nees": filter_row["median_nees"], "mean_nees": filter_row["mean_nees"],
+        "median_nees": filter_row["median_nees"],
+        "mean_nees": filter_row["mean_nees"],
         "nees_inside_95": score.nees_summary["inside_95"],
         **{f"nis_{key}": value for key, value in nis_summary(result.nis).items() if key in ("mean", "inside_95")},
         "resampled_fraction": result.resampled_fraction,
-        "resamplings": result.resamplings, "scans": len(reports),
-        "slam_seconds": seconds, "log_seconds": loaded.log.duration,
+        "resamplings": result.resamplings,
+        "scans": len(reports),
+        "slam_seconds": seconds,
+        "log_seconds": loaded.log.duration,
         "seconds_per_record": seconds / len(loaded.log),
     }
     if maps_folder is not None:
         aligned_landmarks = apply_se2(score.alignment, result.landmarks) if len(result.landmarks) else result.landmarks
-        document = {"landmarks": aligned_landmarks.tolist(), "walls": walls.tolist(),
-                    "corners": loaded.true_corners.tolist(),
-                    "trajectory": apply_se2(score.alignment, result.mean_poses)[:, :2].round(5).tolist(),
-                    "truth": truth[:, :2].round(5).tolist()}
+        document = {
+            "landmarks": aligned_landmarks.tolist(),
+            "walls": walls.tolist(),
+            "corners": loaded.true_corners.tolist(),
+            "trajectory": apply_se2(score.alignment, result.mean_poses)[:, :2].round(5).tolist(),
+            "truth": truth[:, :2].round(5).tolist(),
+        }
         Path(maps_folder, f"{row['run_id']}.json").write_text(json.dumps(document, allow_nan=False))
     return row
 
@@ -287,8 +315,9 @@ class SweepReport:
     skipped: list[str] = field(default_factory=list)
 
 
-def run_sweep(sweep: Sweep, out_dir: str | Path, workers: int | None = None, scheduler: str | None = None,
-              progress: bool = True) -> SweepReport:
+def run_sweep(
+    sweep: Sweep, out_dir: str | Path, workers: int | None = None, scheduler: str | None = None, progress: bool = True
+) -> SweepReport:
     """Run every run of ``sweep`` not yet in ``out_dir``, in parallel, and write the tables.
 
     ``workers`` local processes (default: one per core), or the Dask cluster at ``scheduler``
@@ -297,15 +326,25 @@ def run_sweep(sweep: Sweep, out_dir: str | Path, workers: int | None = None, sch
     out_dir = Path(out_dir)
     (out_dir / MAPS).mkdir(parents=True, exist_ok=True)
     with SweepLock(out_dir):
-        (out_dir / "sweep.json").write_text(json.dumps(jsonable({"name": sweep.name, "source": sweep.source,
-                                                                 "grid": sweep.grid, "seeds": sweep.seeds}),
-                                                       indent=1, allow_nan=False) + "\n")
+        (out_dir / "sweep.json").write_text(
+            json.dumps(
+                jsonable({"name": sweep.name, "source": sweep.source, "grid": sweep.grid, "seeds": sweep.seeds}),
+                indent=1,
+                allow_nan=False,
+            )
+            + "\n"
+        )
         skipped: list[str] = []
         done = finished_runs(out_dir, skipped)
         pending = [run for run in sweep.runs() if run_id(sweep, run) not in done]
         started = time.perf_counter()
-        bar = tqdm(total=len(done) + len(pending), initial=len(done), desc=f"sweep {sweep.name}", unit="run",
-                   disable=not progress)
+        bar = tqdm(
+            total=len(done) + len(pending),
+            initial=len(done),
+            desc=f"sweep {sweep.name}",
+            unit="run",
+            disable=not progress,
+        )
         with (out_dir / RESULTS).open("a") as results:
             if results.tell() and not (out_dir / RESULTS).read_bytes().endswith(b"\n"):
                 results.write("\n")  # after a torn last line, the next result starts a line of its own
@@ -316,11 +355,13 @@ def run_sweep(sweep: Sweep, out_dir: str | Path, workers: int | None = None, sch
                 bar.update(1)
         bar.close()
         order = {run_id(sweep, run): k for k, run in enumerate(sweep.runs())}
-        table = pd.DataFrame(sorted((r for r in done.values() if r["run_id"] in order),
-                                    key=lambda r: order[r["run_id"]]))
+        table = pd.DataFrame(
+            sorted((r for r in done.values() if r["run_id"] in order), key=lambda r: order[r["run_id"]])
+        )
         paths = write_tables(table, list(sweep.grid), out_dir)
-    return SweepReport(table, len(pending), len(sweep.runs()) - len(pending), time.perf_counter() - started, paths,
-                       skipped)
+    return SweepReport(
+        table, len(pending), len(sweep.runs()) - len(pending), time.perf_counter() - started, paths, skipped
+    )
 
 
 class SweepLock:
@@ -343,8 +384,10 @@ class SweepLock:
                 holder = self._holder()
                 if holder is not None and self._alive(*holder):
                     pid, host = holder
-                    message = (f"{self.path.parent}: another sweep (process {pid} on {host}) is writing to this "
-                               f"folder; wait for it to finish, or remove {self.path} if it is gone")
+                    message = (
+                        f"{self.path.parent}: another sweep (process {pid} on {host}) is writing to this "
+                        f"folder; wait for it to finish, or remove {self.path} if it is gone"
+                    )
                     raise ConfigError(message) from None
                 self.path.unlink(missing_ok=True)  # stale: its process is gone
                 continue
@@ -402,8 +445,19 @@ def _execute(sweep: Sweep, runs: list[dict], maps_folder: str, workers: int | No
             yield future.result()
 
 
-METRICS = ["ate_rmse", "ate_aligned_rmse", "reckoning_ate_rmse", "optimum_ratio", "optimum_aligned_ratio",
-           "map_aligned_rmse", "rpe_trans_rmse", "median_nees", "landmarks", "slam_seconds", "seconds_per_record"]
+METRICS = [
+    "ate_rmse",
+    "ate_aligned_rmse",
+    "reckoning_ate_rmse",
+    "optimum_ratio",
+    "optimum_aligned_ratio",
+    "map_aligned_rmse",
+    "rpe_trans_rmse",
+    "median_nees",
+    "landmarks",
+    "slam_seconds",
+    "seconds_per_record",
+]
 
 
 def summarise(table: pd.DataFrame, grid_keys: list[str], metrics: list[str] = METRICS) -> pd.DataFrame:
@@ -420,8 +474,11 @@ def summarise(table: pd.DataFrame, grid_keys: list[str], metrics: list[str] = ME
             # A metric absent from older tables: no values.
             values = group.get(metric, pd.Series(dtype=float)).dropna().to_numpy(dtype=float)
             mean = values.mean() if len(values) else math.nan
-            half = (stats.t.ppf(0.975, len(values) - 1) * values.std(ddof=1) / math.sqrt(len(values))
-                    if len(values) > 1 else math.nan)
+            half = (
+                stats.t.ppf(0.975, len(values) - 1) * values.std(ddof=1) / math.sqrt(len(values))
+                if len(values) > 1
+                else math.nan
+            )
             row[metric], row[f"{metric}_ci95"] = mean, half
         rows.append(row)
     return pd.DataFrame(rows)
@@ -441,7 +498,10 @@ def summary_markdown(table: pd.DataFrame, grid_keys: list[str]) -> str:
     shown = summary[grid_keys + ["runs"]].copy()
     for metric in METRICS:
         unit = " [m]" if metric.endswith("rmse") else " [s]" if "seconds" in metric else ""
-        shown[metric + unit] = [f"{m:.4g} ± {h:.2g}" if not math.isnan(h) else f"{m:.4g}"
-                                for m, h in zip(summary[metric], summary[f"{metric}_ci95"])]
-    return ("Mean ± 95 % confidence half-width over the seeds, per grid cell.\n\n"
-            + shown.to_markdown(index=False) + "\n")
+        shown[metric + unit] = [
+            f"{m:.4g} ± {h:.2g}" if not math.isnan(h) else f"{m:.4g}"
+            for m, h in zip(summary[metric], summary[f"{metric}_ci95"])
+        ]
+    return (
+        "Mean ± 95 % confidence half-width over the seeds, per grid cell.\n\n" + shown.to_markdown(index=False) + "\n"
+    )

@@ -16,32 +16,48 @@ import pandas as pd  # noqa: E402
 from mazeslam.evaluation.sweep import MAPS, summarise  # noqa: E402
 
 #: The summary's columns: (metric, header). Metrics an older table lacks are left out.
-REPORTED = [("ate_rmse", "ATE [mm]"), ("ate_aligned_rmse", "ATE aligned [mm]"),
-            ("optimum_ate_rmse", "optimum's ATE [mm]"), ("optimum_ratio", "ATE / optimum's"),
-            ("optimum_aligned_ratio", "aligned ATE / optimum's"), ("reckoning_ate_rmse", "dead reckoning ATE [mm]"),
-            ("map_aligned_rmse", "map aligned [mm]"), ("landmarks", "landmarks"),
-            ("median_nees", "median NEES"), ("mean_nees", "mean NEES"), ("nees_inside_95", "NEES inside 95 %"),
-            ("nis_mean", "NIS mean"), ("nis_inside_95", "NIS inside 95 %"),
-            ("resampled_fraction", "resampled scans"), ("slam_seconds", "run time [s]")]
+REPORTED = [
+    ("ate_rmse", "ATE [mm]"),
+    ("ate_aligned_rmse", "ATE aligned [mm]"),
+    ("optimum_ate_rmse", "optimum's ATE [mm]"),
+    ("optimum_ratio", "ATE / optimum's"),
+    ("optimum_aligned_ratio", "aligned ATE / optimum's"),
+    ("reckoning_ate_rmse", "dead reckoning ATE [mm]"),
+    ("map_aligned_rmse", "map aligned [mm]"),
+    ("landmarks", "landmarks"),
+    ("median_nees", "median NEES"),
+    ("mean_nees", "mean NEES"),
+    ("nees_inside_95", "NEES inside 95 %"),
+    ("nis_mean", "NIS mean"),
+    ("nis_inside_95", "NIS inside 95 %"),
+    ("resampled_fraction", "resampled scans"),
+    ("slam_seconds", "run time [s]"),
+]
 
 #: The plots' panels: (metric, axis label, reference lines {value: label}, log scale).
-PLOTTED = [("ate_rmse", "ATE RMSE [mm]", {}, False),
-           ("ate_aligned_rmse", "ATE RMSE, SE(2)-aligned [mm]", {}, False),
-           ("optimum_ratio", "ATE / batch optimum's ATE", {1.0: "optimum"}, False),
-           ("optimum_aligned_ratio", "aligned ATE / optimum's aligned ATE", {1.0: "optimum"}, False),
-           ("median_nees", "median pose NEES (log)", {3.0: "consistent (3)", 7.81: "95 % bound"}, True),
-           ("nis_mean", "mean NIS", {2.0: "consistent (2)"}, False),
-           ("map_aligned_rmse", "map RMSE, aligned [mm]", {}, False),
-           ("slam_seconds", "FastSLAM run time [s]", {}, False)]
+PLOTTED = [
+    ("ate_rmse", "ATE RMSE [mm]", {}, False),
+    ("ate_aligned_rmse", "ATE RMSE, SE(2)-aligned [mm]", {}, False),
+    ("optimum_ratio", "ATE / batch optimum's ATE", {1.0: "optimum"}, False),
+    ("optimum_aligned_ratio", "aligned ATE / optimum's aligned ATE", {1.0: "optimum"}, False),
+    ("median_nees", "median pose NEES (log)", {3.0: "consistent (3)", 7.81: "95 % bound"}, True),
+    ("nis_mean", "mean NIS", {2.0: "consistent (2)"}, False),
+    ("map_aligned_rmse", "map RMSE, aligned [mm]", {}, False),
+    ("slam_seconds", "FastSLAM run time [s]", {}, False),
+]
 
 #: Axis labels (with units) of the settings sweeps vary, by their short name.
 SETTING_LABELS = {
-    "NPARTICLES": "number of particles", "version": "FastSLAM version", "beams": "scan points N (beams over 360 deg)",
-    "mode": "landmarks", "sigmaR+sigmaB": "assumed sensor noise sigmaR / sigmaB\n(m, rad)",
+    "NPARTICLES": "number of particles",
+    "version": "FastSLAM version",
+    "beams": "scan points N (beams over 360 deg)",
+    "mode": "landmarks",
+    "sigmaR+sigmaB": "assumed sensor noise sigmaR / sigmaB\n(m, rad)",
     "sigmaX+sigmaTH+sigmaTH_drive": "assumed odometry noise sigmaX / sigmaTH / sigmaTH_drive\n"
-                                    "(m/sqrt(m), rad/sqrt(rad), rad/sqrt(m))",
+    "(m/sqrt(m), rad/sqrt(rad), rad/sqrt(m))",
     "observation_scale": "observation_scale\n(x the corners' calibrated covariance)",
-    "inflation": "inflation (x every noise variance)", "range_noise_std": "laser range noise [m]",
+    "inflation": "inflation (x every noise variance)",
+    "range_noise_std": "laser range noise [m]",
 }
 
 
@@ -81,15 +97,20 @@ def summary_table(table: pd.DataFrame, keys: list[str]) -> str:
     summary = summarise(table, keys, [metric for metric, _ in reported])
     shown = summary[keys + ["runs"]].rename(columns={key: short_name(key) for key in keys})
     for metric, header in reported:
-        shown[header] = [f"{m:.3g} ± {h:.2g}" if not math.isnan(h) else f"{m:.4g}"
-                         for m, h in zip(summary[metric], summary[f"{metric}_ci95"])]
-    return ("Mean ± 95 % confidence half-width over the seeds, per grid cell. ATE: the particles' mean path "
-            "against the truth (aligned: after the best rigid motion); optimum: the batch least-squares "
-            "solution of the same log with the filter's noise model and the true association (ratio 1: as good "
-            "as any estimator); NEES: pose error normalised by the cloud's covariance, per record (consistent: "
-            "3, 95 % of records under 7.81); NIS: innovation of each associated observation normalised by its "
-            "predicted covariance (consistent: 2, 95 % under 5.99); resampled: share of scans.\n\n"
-            + shown.to_markdown(index=False) + "\n")
+        shown[header] = [
+            f"{m:.3g} ± {h:.2g}" if not math.isnan(h) else f"{m:.4g}"
+            for m, h in zip(summary[metric], summary[f"{metric}_ci95"])
+        ]
+    return (
+        "Mean ± 95 % confidence half-width over the seeds, per grid cell. ATE: the particles' mean path "
+        "against the truth (aligned: after the best rigid motion); optimum: the batch least-squares "
+        "solution of the same log with the filter's noise model and the true association (ratio 1: as good "
+        "as any estimator); NEES: pose error normalised by the cloud's covariance, per record (consistent: "
+        "3, 95 % of records under 7.81); NIS: innovation of each associated observation normalised by its "
+        "predicted covariance (consistent: 2, 95 % under 5.99); resampled: share of scans.\n\n"
+        + shown.to_markdown(index=False)
+        + "\n"
+    )
 
 
 def _plot_against(table: pd.DataFrame, key: str, others: list[str], out_dir: Path, name: str = "") -> Path:
@@ -102,7 +123,7 @@ def _plot_against(table: pd.DataFrame, key: str, others: list[str], out_dir: Pat
     rows = math.ceil(len(plotted) / columns)
     fig, grid = plt.subplots(rows, columns, figsize=(4.3 * columns, 3.5 * rows + 1.0), squeeze=False)
     axes = list(grid.flat)
-    for ax in axes[len(plotted):]:
+    for ax in axes[len(plotted) :]:
         ax.axis("off")
     groups = list(summary.groupby(others)) if others else [((), summary)]
     numeric = pd.api.types.is_numeric_dtype(summary[key])
@@ -111,8 +132,13 @@ def _plot_against(table: pd.DataFrame, key: str, others: list[str], out_dir: Pat
     categorical = not numeric or any(isinstance(v, str) for v in values)
     unordered = categorical and not any("/" in str(v) for v in values)  # linked settings keep the grid's order
     for index, (label, group) in enumerate(groups):
-        group = group.sort_values(key) if numeric else group.set_index(group[key].astype(str)).loc[
-            [v for v in values if v in set(group[key].astype(str))]].reset_index(drop=True)
+        group = (
+            group.sort_values(key)
+            if numeric
+            else group.set_index(group[key].astype(str))
+            .loc[[v for v in values if v in set(group[key].astype(str))]]
+            .reset_index(drop=True)
+        )
         label = label if isinstance(label, tuple) else (label,)
         legend = ", ".join(f"{short_name(o)}={v}" for o, v in zip(others, label))
         x = group[key].to_numpy() if not categorical else np.array([positions[str(v)] for v in group[key]], float)
@@ -120,28 +146,44 @@ def _plot_against(table: pd.DataFrame, key: str, others: list[str], out_dir: Pat
             x = x + 0.08 * (index - (len(groups) - 1) / 2)
         for ax, (metric, _, _, log) in zip(axes, plotted):
             if log:
-                cells = table if not others else table[np.logical_and.reduce([table[o] == v
-                                                                               for o, v in zip(others, label)])]
+                cells = (
+                    table
+                    if not others
+                    else table[np.logical_and.reduce([table[o] == v for o, v in zip(others, label)])]
+                )
                 grouped = cells.groupby(key)[metric]
                 quartiles = grouped.quantile([0.25, 0.5, 0.75]).unstack()
                 quartiles = quartiles.loc[[v for v in group[key]]]
                 middle = quartiles[0.5].to_numpy()
                 yerr = [middle - quartiles[0.25].to_numpy(), quartiles[0.75].to_numpy() - middle]
-                ax.errorbar(x, middle, yerr=yerr, marker="o", capsize=3, label=legend or "FastSLAM",
-                            linestyle="none" if unordered else "-")
+                ax.errorbar(
+                    x,
+                    middle,
+                    yerr=yerr,
+                    marker="o",
+                    capsize=3,
+                    label=legend or "FastSLAM",
+                    linestyle="none" if unordered else "-",
+                )
                 continue
             mean = group[metric].to_numpy(dtype=float)
             half = group[f"{metric}_ci95"].fillna(0).to_numpy(dtype=float)
             lower = np.minimum(half, np.maximum(mean, 0))  # an RMSE, a ratio or a time is never below zero
-            ax.errorbar(x, mean, yerr=[lower, half], marker="o", capsize=3, label=legend or "FastSLAM",
-                        linestyle="none" if unordered else "-")  # no line between unordered categories
+            ax.errorbar(
+                x,
+                mean,
+                yerr=[lower, half],
+                marker="o",
+                capsize=3,
+                label=legend or "FastSLAM",
+                linestyle="none" if unordered else "-",
+            )  # no line between unordered categories
     for ax, (metric, title, lines, log) in zip(axes, plotted):
         if metric == "ate_rmse" and "reckoning_ate_rmse" in summary:
             ax.axhline(summary["reckoning_ate_rmse"].mean(), color="0.5", linestyle="--", label="dead reckoning")
         for value, text in lines.items():
             ax.axhline(value, color="0.4", linestyle=":", linewidth=1)
-            ax.annotate(text, (0.01, value), xycoords=("axes fraction", "data"), fontsize=7, color="0.3",
-                        va="bottom")
+            ax.annotate(text, (0.01, value), xycoords=("axes fraction", "data"), fontsize=7, color="0.3", va="bottom")
         ax.set_ylabel(title, fontsize=9)
         ax.set_title(title.replace(" (log)", ""), fontsize=10)
         ax.set_xlabel(SETTING_LABELS.get(short_name(key), short_name(key)), fontsize=7)
@@ -160,14 +202,17 @@ def _plot_against(table: pd.DataFrame, key: str, others: list[str], out_dir: Pat
             ax.set_xticks(values, [f"{v:g}" for v in values], fontsize=8)
         ax.grid(alpha=0.3)
     handles, labels = [], []
-    for ax in axes[:len(plotted)]:
+    for ax in axes[: len(plotted)]:
         for handle, text in zip(*ax.get_legend_handles_labels()):
             if text not in labels:
                 handles.append(handle)
                 labels.append(text)
     seeds = table.seed.nunique()
-    fig.suptitle(f"{name or out_dir.name}: FastSLAM against {short_name(key)}, {seeds} seeds "
-                 f"(mean and 95 % CI; NEES: median over seeds and quartiles)", fontsize=11)
+    fig.suptitle(
+        f"{name or out_dir.name}: FastSLAM against {short_name(key)}, {seeds} seeds "
+        f"(mean and 95 % CI; NEES: median over seeds and quartiles)",
+        fontsize=11,
+    )
     fig.legend(handles, labels, loc="lower center", ncol=min(len(labels), 5), fontsize=8)
     fig.tight_layout(rect=(0, 0.06, 1, 0.96))
     path = out_dir / f"plot_{short_name(key)}.png"
@@ -178,7 +223,7 @@ def _plot_against(table: pd.DataFrame, key: str, others: list[str], out_dir: Pat
 
 def _maps_side_by_side(table: pd.DataFrame, keys: list[str], out_dir: Path, limit: int = 8) -> Path | None:
     """The first seed's final map (aligned) of each grid cell, up to ``limit`` cells."""
-    first = table[table.seed == table.seed.min()].drop_duplicates(subset=keys)[: limit]
+    first = table[table.seed == table.seed.min()].drop_duplicates(subset=keys)[:limit]
     files = [out_dir / MAPS / f"{run}.json" for run in first.run_id]
     if not files or not all(f.exists() for f in files):
         return None
@@ -200,7 +245,7 @@ def _maps_side_by_side(table: pd.DataFrame, keys: list[str], out_dir: Path, limi
         ax.set_xticks([])
         ax.set_yticks([])
         ax.set_title(", ".join(f"{short_name(k)}={row[k]}" for k in keys) + f"\nATE {row.ate_rmse:.3f} m", fontsize=8)
-    for ax in list(axes.flat)[len(files):]:
+    for ax in list(axes.flat)[len(files) :]:
         ax.axis("off")
     handles, labels = axes.flat[0].get_legend_handles_labels()
     fig.legend(handles, labels, loc="lower center", ncol=3, fontsize=8)

@@ -47,6 +47,9 @@ def associate_known(observation_ids: np.ndarray, slot_ids: np.ndarray, exists: n
     """
     if slot_ids.shape[1] == 0:
         return np.full((len(slot_ids), len(observation_ids)), -1)
-    match = (slot_ids[:, None, :] == observation_ids[None, :, None]) & exists[:, None, :] \
+    match = (
+        (slot_ids[:, None, :] == observation_ids[None, :, None])
+        & exists[:, None, :]
         & (observation_ids[None, :, None] >= 0)
+    )
     return np.where(match.any(axis=2), match.argmax(axis=2), -1)

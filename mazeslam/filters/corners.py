@@ -44,6 +44,8 @@ class CornerMode(enum.StrEnum):
 
     CORNERS = "corners"  #: the fixed kinds only (corners and wall ends)
     ENDPOINTS = "endpoints"  #: every segment end, as the exercise's extract_beacon
+
+
 KINDS = (*FIXED_KINDS, "occluded", "gap", "edge", "junction")
 
 
@@ -91,23 +93,30 @@ class CornerParams:
     covariance_scale: dict[str, float] = field(default_factory=lambda: {"corner": 0.85, "wall_end": 5.5})
 
     def __post_init__(self):
-        require(0 <= self.min_range < self.max_range,
-                f"corner min_range {self.min_range} must be >= 0 and below max_range {self.max_range}")
-        require(0 < self.max_abs_bearing <= 180,
-                f"max_abs_bearing must be in (0, 180] degrees, got {self.max_abs_bearing}")
-        require(0 < self.min_corner_angle <= 90,
-                f"min_corner_angle must be in (0, 90] degrees, got {self.min_corner_angle}")
+        require(
+            0 <= self.min_range < self.max_range,
+            f"corner min_range {self.min_range} must be >= 0 and below max_range {self.max_range}",
+        )
+        require(
+            0 < self.max_abs_bearing <= 180, f"max_abs_bearing must be in (0, 180] degrees, got {self.max_abs_bearing}"
+        )
+        require(
+            0 < self.min_corner_angle <= 90, f"min_corner_angle must be in (0, 90] degrees, got {self.min_corner_angle}"
+        )
         require(self.max_corner_gap > 0, f"max_corner_gap must be positive, got {self.max_corner_gap}")
         require(self.max_skipped_points >= 0, f"max_skipped_points must be >= 0, got {self.max_skipped_points}")
         require(self.max_end_spacing > 0, f"max_end_spacing must be positive, got {self.max_end_spacing}")
         require(self.end_face_std >= 0, f"end_face_std must be >= 0, got {self.end_face_std}")
         require(self.mode in tuple(CornerMode), f"mode must be 'corners' or 'endpoints', got {self.mode!r}")
         object.__setattr__(self, "mode", CornerMode(self.mode))
-        require(isinstance(self.covariance_scale, dict) and set(self.covariance_scale) <= set(KINDS),
-                f"covariance_scale names kinds among {', '.join(KINDS)}, got {self.covariance_scale!r}")
-        require(all(isinstance(value, (int, float)) and 0 < value < math.inf
-                    for value in self.covariance_scale.values()),
-                f"covariance_scale factors must be positive numbers, got {self.covariance_scale!r}")
+        require(
+            isinstance(self.covariance_scale, dict) and set(self.covariance_scale) <= set(KINDS),
+            f"covariance_scale names kinds among {', '.join(KINDS)}, got {self.covariance_scale!r}",
+        )
+        require(
+            all(isinstance(value, (int, float)) and 0 < value < math.inf for value in self.covariance_scale.values()),
+            f"covariance_scale factors must be positive numbers, got {self.covariance_scale!r}",
+        )
 
 
 @dataclass(slots=True)
@@ -236,9 +245,15 @@ class CornerExtractor:
         run_of = np.zeros(len(beams), dtype=int)
         for index, (first, last) in enumerate(runs):
             run_of[first : last + 1] = index
-        pairs = [(i, i + 1, segments[i + 1].first - segments[i].last - 1,
-                  run_of[segments[i].last] == run_of[segments[i + 1].first])
-                 for i in range(len(segments) - 1)]
+        pairs = [
+            (
+                i,
+                i + 1,
+                segments[i + 1].first - segments[i].last - 1,
+                run_of[segments[i].last] == run_of[segments[i + 1].first],
+            )
+            for i in range(len(segments) - 1)
+        ]
         if closed and len(segments) > 1:  # the loop closes: the last segment meets the first
             pairs.append((len(segments) - 1, 0, len(beams) - 1 - segments[-1].last + segments[0].first, True))
         observations = []
@@ -251,19 +266,24 @@ class CornerExtractor:
                     if self.params.mode == CornerMode.CORNERS:
                         point, covariance = corner
                         facing = _toward_sensor(segments[i].normal + segments[j].normal)
-                        observations.append(self._observation(point, np.array(covariance), "corner",
-                                                              beams[segments[i].last], facing))
+                        observations.append(
+                            self._observation(point, np.array(covariance), "corner", beams[segments[i].last], facing)
+                        )
         for i, segment in enumerate(segments):
             for at_start in (True, False):
                 position = segment.first if at_start else segment.last
                 has_corner = corner_before[i] if at_start else corner_after[i]
-                kind = "corner" if has_corner else self._end_kind(ranges, valid, breaks, beams[position], at_start,
-                                                                  segment)
+                kind = (
+                    "corner"
+                    if has_corner
+                    else self._end_kind(ranges, valid, breaks, beams[position], at_start, segment)
+                )
                 facing = _toward_sensor(segment.normal)
                 if self.params.mode == CornerMode.ENDPOINTS:
                     point = segment.start if at_start else segment.end
-                    observations.append(self._observation(point, self._end_covariance(segment, point), kind,
-                                                          beams[position], facing))
+                    observations.append(
+                        self._observation(point, self._end_covariance(segment, point), kind, beams[position], facing)
+                    )
                 elif kind == "wall_end":
                     end = self._wall_end(segment, beams[position], at_start)
                     if end is not None:
@@ -320,8 +340,9 @@ class CornerExtractor:
         inverse = (sb / determinant, -sa / determinant, -cb / determinant, ca / determinant)
         return (x, y), _sandwich(inverse, ((va, 0.0), (0.0, vb)))
 
-    def _wall_end(self, segment: LineSegment, beam: int,
-                  at_start: bool) -> tuple[tuple[float, float], np.ndarray] | None:
+    def _wall_end(
+        self, segment: LineSegment, beam: int, at_start: bool
+    ) -> tuple[tuple[float, float], np.ndarray] | None:
         """Where a wall ends between its last beam and the next: the line meets the ray halfway.
 
         Returns ``(point, covariance (2, 2))``, or None when the two beams land farther apart on the
@@ -355,8 +376,12 @@ class CornerExtractor:
             facing = max(abs(c * x + s * y) / distance, 0.1)
             along_var = (0.25 * distance * self.step / facing) ** 2
         # across n n^T + along t t^T with n = (c, s), t = (-s, c)
-        return np.array([[across * c * c + along_var * s * s, (across - along_var) * c * s],
-                         [(across - along_var) * c * s, across * s * s + along_var * c * c]])
+        return np.array(
+            [
+                [across * c * c + along_var * s * s, (across - along_var) * c * s],
+                [(across - along_var) * c * s, across * s * s + along_var * c * c],
+            ]
+        )
 
     def _observation(self, point_sensor, covariance_xy, kind: str, beam: int, facing: float) -> CornerObservation:
         x, y = float(point_sensor[0]) + self._mount_x, float(point_sensor[1]) + self._mount_y
@@ -364,8 +389,17 @@ class CornerExtractor:
         rng = math.sqrt(rng2)
         jacobian = (x / rng, y / rng, -y / rng2, x / rng2)  # d(range, bearing)/d(x, y)
         covariance_xy = np.asarray(covariance_xy) * self.params.covariance_scale.get(kind, 1.0)
-        return CornerObservation(x, y, rng, math.atan2(y, x), kind, covariance_xy,
-                                 np.array(_sandwich(jacobian, covariance_xy.tolist())), int(beam), facing)
+        return CornerObservation(
+            x,
+            y,
+            rng,
+            math.atan2(y, x),
+            kind,
+            covariance_xy,
+            np.array(_sandwich(jacobian, covariance_xy.tolist())),
+            int(beam),
+            facing,
+        )
 
 
 def _toward_sensor(normal: np.ndarray) -> float:

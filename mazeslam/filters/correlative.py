@@ -43,12 +43,16 @@ class CorrelativeParams:
     max_points: int = 90
 
     def __post_init__(self):
-        require(self.resolution >= 0.001 and self.sigma > 0 and self.turn_step >= 0.01,
-                f"resolution must be >= 0.001 m, sigma positive and turn_step >= 0.01 degrees, got "
-                f"{self.resolution}, {self.sigma}, {self.turn_step}")
+        require(
+            self.resolution >= 0.001 and self.sigma > 0 and self.turn_step >= 0.01,
+            f"resolution must be >= 0.001 m, sigma positive and turn_step >= 0.01 degrees, got "
+            f"{self.resolution}, {self.sigma}, {self.turn_step}",
+        )
         require(0 < self.window_sigmas <= 100, f"window_sigmas must be in (0, 100], got {self.window_sigmas}")
-        require(1 <= self.candidates <= 1000 and 1 <= self.max_points <= 100_000,
-                "candidates must be in 1..1000 and max_points in 1..100000")
+        require(
+            1 <= self.candidates <= 1000 and 1 <= self.max_points <= 100_000,
+            "candidates must be in 1..1000 and max_points in 1..100000",
+        )
 
 
 class LikelihoodGrid:
@@ -82,8 +86,9 @@ class LikelihoodGrid:
         return self.log_values[rows, columns].sum(axis=-1)
 
 
-def correlative_candidates(grid: LikelihoodGrid, points: np.ndarray, prior: np.ndarray, prior_covariance: np.ndarray,
-                           params: CorrelativeParams) -> np.ndarray:
+def correlative_candidates(
+    grid: LikelihoodGrid, points: np.ndarray, prior: np.ndarray, prior_covariance: np.ndarray, params: CorrelativeParams
+) -> np.ndarray:
     """The ``params.candidates`` best poses (C, 3) of ``points`` (K, 2) (robot frame) in the
     reference scan's frame, best first and one per basin, over the window around ``prior`` (3,).
 
@@ -94,8 +99,9 @@ def correlative_candidates(grid: LikelihoodGrid, points: np.ndarray, prior: np.n
     points = points[:: -(-len(points) // params.max_points)]
     spread = np.sqrt(np.diag(prior_covariance)) * params.window_sigmas
     reach = np.ceil(spread[:2] / params.resolution).astype(int)
-    offsets = np.stack(np.meshgrid(np.arange(-reach[0], reach[0] + 1), np.arange(-reach[1], reach[1] + 1),
-                                   indexing="ij"), axis=-1).reshape(-1, 2)  # (T, 2) cells
+    offsets = np.stack(
+        np.meshgrid(np.arange(-reach[0], reach[0] + 1), np.arange(-reach[1], reach[1] + 1), indexing="ij"), axis=-1
+    ).reshape(-1, 2)  # (T, 2) cells
     shifts = prior[:2] + offsets * params.resolution  # (T, 2) metres
     turn_span = min(spread[2], math.pi)
     turns = prior[2] + np.arange(-turn_span, turn_span + 1e-9, math.radians(params.turn_step))
@@ -111,7 +117,7 @@ def correlative_candidates(grid: LikelihoodGrid, points: np.ndarray, prior: np.n
         turn_offset = wrap_angle(turn - prior[2])
         cross = (shifts - prior[:2]) @ information[:2, 2] * turn_offset
         score = fit - shift_penalty - cross - 0.5 * information[2, 2] * turn_offset**2
-        best = np.argsort(score)[-params.candidates:]
+        best = np.argsort(score)[-params.candidates :]
         pose_blocks.append(np.column_stack([shifts[best], np.full(len(best), wrap_angle(turn))]))
         score_blocks.append(score[best])
     poses, scores = np.concatenate(pose_blocks), np.concatenate(score_blocks)
@@ -123,8 +129,11 @@ def _distinct(ranked: np.ndarray, params: CorrelativeParams) -> np.ndarray:
     of a better one (within two cells and two turn steps): one seed per basin."""
     chosen: list[np.ndarray] = []
     for pose in ranked:
-        if all(np.hypot(*(pose[:2] - other[:2])) > 2 * params.resolution
-               or abs(wrap_angle(pose[2] - other[2])) > math.radians(2 * params.turn_step) for other in chosen):
+        if all(
+            np.hypot(*(pose[:2] - other[:2])) > 2 * params.resolution
+            or abs(wrap_angle(pose[2] - other[2])) > math.radians(2 * params.turn_step)
+            for other in chosen
+        ):
             chosen.append(pose)
             if len(chosen) == params.candidates:
                 break

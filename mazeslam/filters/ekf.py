@@ -40,8 +40,9 @@ def innovation(observed: np.ndarray, predicted: np.ndarray) -> np.ndarray:
     return np.stack([observed[..., 0] - predicted[..., 0], wrap_angle(observed[..., 1] - predicted[..., 1])], -1)
 
 
-def update(mean: np.ndarray, covariance: np.ndarray, residual: np.ndarray, jacobian: np.ndarray,
-           noise: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def update(
+    mean: np.ndarray, covariance: np.ndarray, residual: np.ndarray, jacobian: np.ndarray, noise: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """One EKF measurement update of a batch of Gaussians (filterpy's ``update(x, P, z, R, H)``).
 
     Args:
@@ -58,8 +59,9 @@ def update(mean: np.ndarray, covariance: np.ndarray, residual: np.ndarray, jacob
     gain = covariance @ h_t @ np.linalg.inv(s)  # (n, d, k)
     new_mean = mean + np.einsum("nij,nj->ni", gain, residual)
     identity_minus = np.eye(mean.shape[1]) - gain @ jacobian
-    new_covariance = (identity_minus @ covariance @ np.swapaxes(identity_minus, -1, -2)
-                      + gain @ noise @ np.swapaxes(gain, -1, -2))
+    new_covariance = identity_minus @ covariance @ np.swapaxes(identity_minus, -1, -2) + gain @ noise @ np.swapaxes(
+        gain, -1, -2
+    )
     return new_mean, new_covariance, s
 
 

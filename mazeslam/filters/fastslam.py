@@ -132,17 +132,26 @@ class FastSLAMParams:
             require(getattr(self, name) >= 0, f"{name} must be >= 0, got {getattr(self, name)}")
         OdometryNoise(self.sigmaX, self.sigmaTH, self.sigmaTH_drive)  # checks the odometry terms
         require(self.observation_scale >= 0, f"observation_scale must be >= 0, got {self.observation_scale}")
-        require(self.sigmaR > 0 or self.observation_scale > 0,
-                "sigmaR must be positive unless the observations' own covariances are used (observation_scale > 0)")
-        require(0 < self.gate <= self.new_landmark_gate,
-                f"need 0 < gate <= new_landmark_gate, got {self.gate} and {self.new_landmark_gate}")
-        require(0 <= self.resample_threshold <= 1,
-                f"resample_threshold must be in [0, 1], got {self.resample_threshold}")
-        require(self.association in tuple(Association),
-                f"association must be one of {', '.join(Association)}, got {self.association!r}")
+        require(
+            self.sigmaR > 0 or self.observation_scale > 0,
+            "sigmaR must be positive unless the observations' own covariances are used (observation_scale > 0)",
+        )
+        require(
+            0 < self.gate <= self.new_landmark_gate,
+            f"need 0 < gate <= new_landmark_gate, got {self.gate} and {self.new_landmark_gate}",
+        )
+        require(
+            0 <= self.resample_threshold <= 1, f"resample_threshold must be in [0, 1], got {self.resample_threshold}"
+        )
+        require(
+            self.association in tuple(Association),
+            f"association must be one of {', '.join(Association)}, got {self.association!r}",
+        )
         object.__setattr__(self, "association", Association(self.association))
-        require(self.view_range >= 0 and 1 <= self.tentative_limit <= 1000,
-                "view_range must be >= 0 and tentative_limit in 1..1000")
+        require(
+            self.view_range >= 0 and 1 <= self.tentative_limit <= 1000,
+            "view_range must be >= 0 and tentative_limit in 1..1000",
+        )
         require(1 <= self.inflation < math.inf, f"inflation must be a factor >= 1, got {self.inflation}")
         require(0 < self.facing_gate <= 180, f"facing_gate must be in (0, 180] degrees, got {self.facing_gate}")
         require(self.version in PROPOSALS, f"version must be 1 or 2 (FastSLAM 1.0 or 2.0), got {self.version}")
@@ -241,7 +250,8 @@ class FastSLAM:
         observations (``update``) before a pose is drawn.
         """
         self.poses, self.pose_covariances = self.proposal.predict(
-            self.poses, self.pose_covariances, distance, turn, self.motion_noise, self.rng)
+            self.poses, self.pose_covariances, distance, turn, self.motion_noise, self.rng
+        )
 
     def predict_relative(self, increment) -> None:
         """Move every particle by a relative motion ``increment`` (dx, dy, dtheta) given in its own
@@ -250,7 +260,8 @@ class FastSLAM:
         increment = np.asarray(increment, dtype=float)
         covariance = self.motion_noise.relative_covariance(increment)
         self.poses, self.pose_covariances = self.proposal.predict_relative(
-            self.poses, self.pose_covariances, increment, covariance, self.rng)
+            self.poses, self.pose_covariances, increment, covariance, self.rng
+        )
 
     # -- observation model --------------------------------------------------------------------
     def _used_slots(self) -> int:
@@ -268,10 +279,14 @@ class FastSLAM:
         bearing = wrap_angle(np.arctan2(dy, dx) - self.poses[:, None, 2])
         return rho, bearing, (dx / rho, dy / rho, -dy / q, dx / q)
 
-
     # -- update -------------------------------------------------------------------------------
-    def update(self, observations: np.ndarray, covariances: np.ndarray | None = None,
-               ids: np.ndarray | None = None, facings: np.ndarray | None = None) -> UpdateReport:
+    def update(
+        self,
+        observations: np.ndarray,
+        covariances: np.ndarray | None = None,
+        ids: np.ndarray | None = None,
+        facings: np.ndarray | None = None,
+    ) -> UpdateReport:
         """Weigh and correct every particle with one scan's observations.
 
         Args:
@@ -306,7 +321,8 @@ class FastSLAM:
         # 2. The proposal's draw; the landmarks are then corrected at the drawn poses.
         model = prior
         self.poses, self.pose_covariances, joint = self.proposal.draw(
-            self.poses, self.pose_covariances, assigned, observations, self.means, self.covariances, noise, self.rng)
+            self.poses, self.pose_covariances, assigned, observations, self.means, self.covariances, noise, self.rng
+        )
         if self.proposal.carries_pose_uncertainty:
             model = self._model(observations, noise, m, with_pose_uncertainty=False)
         # 3. Landmarks and weights, observation by observation.
@@ -314,9 +330,19 @@ class FastSLAM:
         report.nis = _normalised_innovations(likelihood[0], assigned, self.weights())
         matched_now = np.zeros_like(self.exists)
         for k in range(count):
-            self._apply(k, assigned[:, k], model, prior.distance2, likelihood, observations[k], noise[k],
-                        None if ids is None else ids[k], None if relative_facings is None else relative_facings[k],
-                        matched_now, report)
+            self._apply(
+                k,
+                assigned[:, k],
+                model,
+                prior.distance2,
+                likelihood,
+                observations[k],
+                noise[k],
+                None if ids is None else ids[k],
+                None if relative_facings is None else relative_facings[k],
+                matched_now,
+                report,
+            )
         # 4. Tentative landmarks predicted in view but not seen.
         if count:
             self._manage_landmarks(model.rho, matched_now, report)
@@ -327,8 +353,9 @@ class FastSLAM:
             report.resampled = True
         return report
 
-    def _model(self, observations: np.ndarray, noise: np.ndarray, m: int,
-               with_pose_uncertainty: bool) -> MeasurementModel:
+    def _model(
+        self, observations: np.ndarray, noise: np.ndarray, m: int, with_pose_uncertainty: bool
+    ) -> MeasurementModel:
         """The measurement model of the first ``m`` slots at the current poses (see
         ``MeasurementModel``); ``with_pose_uncertainty`` adds the motion covariance not yet drawn."""
         rho, bearing, h = self._predicted(m)
@@ -352,8 +379,20 @@ class FastSLAM:
         distance2[~np.broadcast_to(self.exists[:, None, :m], distance2.shape)] = np.inf
         return MeasurementModel(rho, bearing, h, (nu0, nu1), det, distance2)
 
-    def _apply(self, k, slots, model: MeasurementModel, distance2: np.ndarray, likelihood, observation, noise,
-               identity, facing, matched_now, report) -> None:
+    def _apply(
+        self,
+        k,
+        slots,
+        model: MeasurementModel,
+        distance2: np.ndarray,
+        likelihood,
+        observation,
+        noise,
+        identity,
+        facing,
+        matched_now,
+        report,
+    ) -> None:
         """EKF-update the landmarks matched by observation k, start new ones, and weigh the particles.
 
         ``model`` linearises at the poses the particles now have; ``distance2`` (P, K, m) is the
@@ -367,9 +406,9 @@ class FastSLAM:
             j = slots[rows]
             residual = np.column_stack([model.nu[0][rows, k, j], model.nu[1][rows, k, j]])
             self.means[rows, j], self.covariances[rows, j], _ = ekf.update(
-                self.means[rows, j], self.covariances[rows, j], residual, model.jacobians(rows, j), noise)
-            self.log_weights[rows] += (-0.5 * likelihood[0][rows, k] - LOG_TWO_PI
-                                       - 0.5 * np.log(likelihood[1][rows, k]))
+                self.means[rows, j], self.covariances[rows, j], residual, model.jacobians(rows, j), noise
+            )
+            self.log_weights[rows] += -0.5 * likelihood[0][rows, k] - LOG_TWO_PI - 0.5 * np.log(likelihood[1][rows, k])
             self.seen[rows, j] += 1
             self.missed[rows, j] = 0
             matched_now[rows, j] = True
@@ -385,8 +424,9 @@ class FastSLAM:
         if new.any():
             self._add_landmarks(np.flatnonzero(new), observation, noise, identity, facing, matched_now)
             # A new landmark's likelihood: the density at the edge of the new-landmark gate.
-            self.log_weights[new] += -0.5 * self.params.new_landmark_gate - LOG_TWO_PI - 0.5 * math.log(
-                np.linalg.det(noise))
+            self.log_weights[new] += (
+                -0.5 * self.params.new_landmark_gate - LOG_TWO_PI - 0.5 * math.log(np.linalg.det(noise))
+            )
             report.new += int(new.sum())
 
     def _add_landmarks(self, rows: np.ndarray, observation, noise, identity, facing, matched_now) -> None:
@@ -430,8 +470,12 @@ class FastSLAM:
         """Count misses of tentative landmarks predicted in view (``predicted_range`` (P, m) of the
         slots that existed before this scan), and remove repeatedly missed ones."""
         m = predicted_range.shape[1]
-        in_view = (self.exists[:, :m] & (self.seen[:, :m] <= 1) & ~matched_now[:, :m]
-                   & (predicted_range < self.params.view_range))
+        in_view = (
+            self.exists[:, :m]
+            & (self.seen[:, :m] <= 1)
+            & ~matched_now[:, :m]
+            & (predicted_range < self.params.view_range)
+        )
         self.missed[:, :m][in_view] += 1
         remove = self.exists & (self.missed >= self.params.tentative_limit)
         report.removed += int(remove.sum())

@@ -52,8 +52,9 @@ class LineParams:
         require(self.merge_threshold > 0, f"merge_threshold must be positive, got {self.merge_threshold}")
         require(2 <= self.min_points <= 100_000, f"min_points must be in 2..100000, got {self.min_points}")
         require(self.min_length >= 0, f"min_length must be >= 0, got {self.min_length}")
-        require(0 < self.breakpoint_angle < 90,
-                f"breakpoint_angle must be in (0, 90) degrees, got {self.breakpoint_angle}")
+        require(
+            0 < self.breakpoint_angle < 90, f"breakpoint_angle must be in (0, 90) degrees, got {self.breakpoint_angle}"
+        )
         require(self.range_noise_std >= 0, f"range_noise_std must be >= 0, got {self.range_noise_std}")
 
 

@@ -54,8 +54,9 @@ class OdometryNoise:
     def increment_covariance(self, distance: float, turn: float) -> np.ndarray:
         """Covariance (2, 2) of an odometry increment (distance m, turn rad): diagonal,
         ``sigmaX^2 |d|`` and ``sigmaTH^2 |turn| + sigmaTH_drive^2 |d|``."""
-        return np.diag([self.sigmaX**2 * abs(distance),
-                        self.sigmaTH**2 * abs(turn) + self.sigmaTH_drive**2 * abs(distance)])
+        return np.diag(
+            [self.sigmaX**2 * abs(distance), self.sigmaTH**2 * abs(turn) + self.sigmaTH_drive**2 * abs(distance)]
+        )
 
     def relative_covariance(self, increment: np.ndarray) -> np.ndarray:
         """Covariance (3, 3) of a relative motion ``increment`` (dx, dy, dth) in the robot frame it
@@ -66,8 +67,9 @@ class OdometryNoise:
         return np.diag([position, position, self.sigmaTH**2 * abs(increment[2]) + self.sigmaTH_drive**2 * distance])
 
 
-def predict_odometry(poses: np.ndarray, distance: float, turn: float, noise: OdometryNoise,
-                     rng: np.random.Generator) -> np.ndarray:
+def predict_odometry(
+    poses: np.ndarray, distance: float, turn: float, noise: OdometryNoise, rng: np.random.Generator
+) -> np.ndarray:
     """Particles ``poses`` (P, 3) moved by one odometry increment with motion-proportional noise.
 
     Args:
@@ -83,8 +85,9 @@ def predict_odometry(poses: np.ndarray, distance: float, turn: float, noise: Odo
     return advance_pose(poses, distance + draws[0], turn + draws[1])
 
 
-def predict_relative(poses: np.ndarray, increment: np.ndarray, covariance: np.ndarray,
-                     rng: np.random.Generator) -> np.ndarray:
+def predict_relative(
+    poses: np.ndarray, increment: np.ndarray, covariance: np.ndarray, rng: np.random.Generator
+) -> np.ndarray:
     """Particles ``poses`` (P, 3) moved by a relative motion ``increment`` (3,) (robot frame) with
     noise drawn from ``covariance`` (3, 3), one draw per particle. Returns the new poses (P, 3)."""
     noise = rng.multivariate_normal(np.zeros(3), covariance, size=len(poses), method="eigh")

@@ -27,15 +27,36 @@ class Proposal(Protocol):
 
     carries_pose_uncertainty: bool
 
-    def predict(self, poses: np.ndarray, pose_covariances: np.ndarray, distance: float, turn: float,
-                noise: OdometryNoise, rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray]: ...
+    def predict(
+        self,
+        poses: np.ndarray,
+        pose_covariances: np.ndarray,
+        distance: float,
+        turn: float,
+        noise: OdometryNoise,
+        rng: np.random.Generator,
+    ) -> tuple[np.ndarray, np.ndarray]: ...
 
-    def predict_relative(self, poses: np.ndarray, pose_covariances: np.ndarray, increment: np.ndarray,
-                         covariance: np.ndarray, rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray]: ...
+    def predict_relative(
+        self,
+        poses: np.ndarray,
+        pose_covariances: np.ndarray,
+        increment: np.ndarray,
+        covariance: np.ndarray,
+        rng: np.random.Generator,
+    ) -> tuple[np.ndarray, np.ndarray]: ...
 
-    def draw(self, poses: np.ndarray, pose_covariances: np.ndarray, assigned: np.ndarray, observations: np.ndarray,
-             means: np.ndarray, covariances: np.ndarray, noise: np.ndarray, rng: np.random.Generator,
-             ) -> tuple[np.ndarray, np.ndarray, tuple[np.ndarray, np.ndarray] | None]: ...
+    def draw(
+        self,
+        poses: np.ndarray,
+        pose_covariances: np.ndarray,
+        assigned: np.ndarray,
+        observations: np.ndarray,
+        means: np.ndarray,
+        covariances: np.ndarray,
+        noise: np.ndarray,
+        rng: np.random.Generator,
+    ) -> tuple[np.ndarray, np.ndarray, tuple[np.ndarray, np.ndarray] | None]: ...
 
 
 class MotionProposal:
@@ -44,13 +65,15 @@ class MotionProposal:
     #: The weights' predictive covariance holds no pose uncertainty: the pose is already drawn.
     carries_pose_uncertainty = False
 
-    def predict(self, poses, pose_covariances, distance: float, turn: float, noise: OdometryNoise,
-                rng: np.random.Generator):
+    def predict(
+        self, poses, pose_covariances, distance: float, turn: float, noise: OdometryNoise, rng: np.random.Generator
+    ):
         """Move by an odometry increment (m, rad), drawing each particle's noise now."""
         return predict_odometry(poses, distance, turn, noise, rng), pose_covariances
 
-    def predict_relative(self, poses, pose_covariances, increment: np.ndarray, covariance: np.ndarray,
-                         rng: np.random.Generator):
+    def predict_relative(
+        self, poses, pose_covariances, increment: np.ndarray, covariance: np.ndarray, rng: np.random.Generator
+    ):
         """Move by a robot-frame motion (dx, dy, dth) with covariance (3, 3), drawing the noise now."""
         return predict_relative(poses, increment, covariance, rng), pose_covariances
 
@@ -66,8 +89,9 @@ class ObservationProposal:
     #: The weights' predictive covariance includes the pose's (motion) uncertainty.
     carries_pose_uncertainty = True
 
-    def predict(self, poses, pose_covariances, distance: float, turn: float, noise: OdometryNoise,
-                rng: np.random.Generator):
+    def predict(
+        self, poses, pose_covariances, distance: float, turn: float, noise: OdometryNoise, rng: np.random.Generator
+    ):
         """Move the means by an odometry increment (m, rad) and propagate the covariance,
         F Sigma F^T + V Q V^T with the Jacobians of ``advance_pose`` w.r.t. the pose (F) and to
         (distance, turn) (V)."""
@@ -83,8 +107,9 @@ class ObservationProposal:
         covariance = _propagate(pose_covariances, f, v, noise.increment_covariance(distance, turn))
         return advance_pose(poses, distance, turn), covariance
 
-    def predict_relative(self, poses, pose_covariances, increment: np.ndarray, covariance: np.ndarray,
-                         rng: np.random.Generator):
+    def predict_relative(
+        self, poses, pose_covariances, increment: np.ndarray, covariance: np.ndarray, rng: np.random.Generator
+    ):
         """Move the means by a robot-frame motion (dx, dy, dth) and propagate the covariance through
         the Jacobians of ``compose(pose, increment)`` w.r.t. the pose (F) and the increment (V)."""
         cos_t, sin_t = np.cos(poses[:, 2]), np.sin(poses[:, 2])

@@ -81,17 +81,24 @@ class ScanMatchParams:
         object.__setattr__(self, "correspondence_distances", tuple(self.correspondence_distances))
         require(self.point_noise > 0, "point_noise must be positive (m)")
         require(0 <= self.min_range < self.max_range, "need 0 <= min_range < max_range (m)")
-        require(3 <= self.neighbours <= 1000,
-                f"neighbours must be in 3..1000 to define a surface, got {self.neighbours}")
+        require(
+            3 <= self.neighbours <= 1000, f"neighbours must be in 3..1000 to define a surface, got {self.neighbours}"
+        )
         require(0 < self.max_flatness <= 1, "max_flatness must be in (0, 1]")
-        require(len(self.correspondence_distances) > 0 and all(d > 0 for d in self.correspondence_distances),
-                "correspondence_distances must be positive distances (m)")
-        require(1 <= self.iterations_per_stage <= 1000,
-                f"iterations_per_stage must be in 1..1000, got {self.iterations_per_stage}")
+        require(
+            len(self.correspondence_distances) > 0 and all(d > 0 for d in self.correspondence_distances),
+            "correspondence_distances must be positive distances (m)",
+        )
+        require(
+            1 <= self.iterations_per_stage <= 1000,
+            f"iterations_per_stage must be in 1..1000, got {self.iterations_per_stage}",
+        )
         require(len(self.correspondence_distances) <= 100, "correspondence_distances: at most 100 stages")
         require(0 <= self.min_overlap <= 1, "min_overlap must be a fraction in [0, 1]")
-        require(self.prior_floor > 0 and self.blind_sigma_xy > 0 and self.blind_sigma_th > 0,
-                "prior_floor, blind_sigma_xy and blind_sigma_th must be positive")
+        require(
+            self.prior_floor > 0 and self.blind_sigma_xy > 0 and self.blind_sigma_th > 0,
+            "prior_floor, blind_sigma_xy and blind_sigma_th must be positive",
+        )
 
 
 class ReferenceScan:
@@ -131,8 +138,14 @@ def _prior_offset(pose: np.ndarray, prior: np.ndarray) -> np.ndarray:
     return offset
 
 
-def match_scan(reference: ReferenceScan, points: np.ndarray, prior: np.ndarray, prior_covariance: np.ndarray,
-               params: ScanMatchParams, start: np.ndarray | None = None) -> Match:
+def match_scan(
+    reference: ReferenceScan,
+    points: np.ndarray,
+    prior: np.ndarray,
+    prior_covariance: np.ndarray,
+    params: ScanMatchParams,
+    start: np.ndarray | None = None,
+) -> Match:
     """Gauss-Newton on the objective in the module docstring from ``start`` (default the prior).
 
     ``points`` (K, 2) are the current scan's returns in the robot frame; ``prior`` (3,) and
@@ -161,8 +174,14 @@ def match_scan(reference: ReferenceScan, points: np.ndarray, prior: np.ndarray, 
     return _score(reference, points, pose, prior, prior_information, params)
 
 
-def _score(reference: ReferenceScan, points: np.ndarray, pose: np.ndarray, prior: np.ndarray,
-           prior_information: np.ndarray, params: ScanMatchParams) -> Match:
+def _score(
+    reference: ReferenceScan,
+    points: np.ndarray,
+    pose: np.ndarray,
+    prior: np.ndarray,
+    prior_information: np.ndarray,
+    params: ScanMatchParams,
+) -> Match:
     """The objective with a point that has no partner within the final correspondence distance
     costing as much as one that far from its surface, and the overlap (the fraction that has one)."""
     cap = params.correspondence_distances[-1]
@@ -240,7 +259,8 @@ def laser_odometry(course_log: CourseLog, geometry: BeamGeometry, params: ScanMa
         wheels[index], had_odometry[index] = wheel_motion(course_log, records[index - 1] if index else -1, record)
         if index:
             increments[index], accepted[index], overlap[index] = _interval(
-                reference, points, wheels[index], had_odometry[index], previous_motion, params)
+                reference, points, wheels[index], had_odometry[index], previous_motion, params
+            )
             previous_motion = increments[index]
         else:  # nothing to match the first scan to: the odometry from the start pose
             increments[index] = wheels[index]
@@ -248,8 +268,14 @@ def laser_odometry(course_log: CourseLog, geometry: BeamGeometry, params: ScanMa
     return LaserOdometry(records, increments, wheels, had_odometry, accepted, overlap)
 
 
-def _interval(reference: ReferenceScan | None, points: np.ndarray, wheel: np.ndarray, has_odometry: bool,
-              previous_motion: np.ndarray | None, params: ScanMatchParams) -> tuple[np.ndarray, bool, float]:
+def _interval(
+    reference: ReferenceScan | None,
+    points: np.ndarray,
+    wheel: np.ndarray,
+    has_odometry: bool,
+    previous_motion: np.ndarray | None,
+    params: ScanMatchParams,
+) -> tuple[np.ndarray, bool, float]:
     """The increment of one interval, whether its match was accepted, and the match's overlap."""
     if has_odometry:
         prior, covariance = wheel, odometry_prior_covariance(wheel, params)

@@ -51,8 +51,10 @@ MOTION_FLOOR_VARIANCE = 1e-10
 
 # -- factors: residuals and their analytic Jacobians ----------------------------------------------
 
-def compose_odometry(increments: np.ndarray, sigma_x: float, sigma_th: float,
-                     sigma_th_drive: float) -> tuple[np.ndarray, np.ndarray]:
+
+def compose_odometry(
+    increments: np.ndarray, sigma_x: float, sigma_th: float, sigma_th_drive: float
+) -> tuple[np.ndarray, np.ndarray]:
     """The relative pose of a run of odometry records and its first-order covariance.
 
     Record k moves the pose by ``advance_pose(pose, d_k, t_k)`` (a midpoint arc) with independent
@@ -88,14 +90,16 @@ def compose_odometry(increments: np.ndarray, sigma_x: float, sigma_th: float,
     g[:, 1, 1] = 0.5 * step[:, 0] + lever[:, 0]
     g[:, 2, 1] = 1.0
     # 3. Sum of G_k Q_k G_k^T, Q_k diagonal.
-    q = np.column_stack([sigma_x**2 * np.abs(distance),
-                         sigma_th**2 * np.abs(turn) + sigma_th_drive**2 * np.abs(distance)])
+    q = np.column_stack(
+        [sigma_x**2 * np.abs(distance), sigma_th**2 * np.abs(turn) + sigma_th_drive**2 * np.abs(distance)]
+    )
     covariance = np.einsum("kia,ka,kja->ij", g, q, g)
     return np.array([end[0], end[1], wrap_angle(turn.sum())]), covariance
 
 
-def range_bearing_residual(poses: np.ndarray, landmarks: np.ndarray,
-                           observations: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def range_bearing_residual(
+    poses: np.ndarray, landmarks: np.ndarray, observations: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Residual ``h(pose, landmark) - z`` of range-bearing observations, and its Jacobians
     (``ekf.range_bearing``'s).
 
@@ -112,8 +116,9 @@ def range_bearing_residual(poses: np.ndarray, landmarks: np.ndarray,
     return -ekf.innovation(observations, predicted), j_pose, j_landmark
 
 
-def odometry_residual(from_poses: np.ndarray, to_poses: np.ndarray,
-                      measured: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def odometry_residual(
+    from_poses: np.ndarray, to_poses: np.ndarray, measured: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Residual of relative-pose factors: ``relative(from, to) - measured``, heading wrapped.
 
     Args:
@@ -138,6 +143,7 @@ def odometry_residual(from_poses: np.ndarray, to_poses: np.ndarray,
 
 
 # -- the problem ----------------------------------------------------------------------------------
+
 
 @dataclass
 class SmoothingProblem:
@@ -199,8 +205,14 @@ class SmoothingResult:
         return self.chi2 / self.dof if self.dof > 0 else float("nan")
 
 
-def build_problem(course_log: CourseLog, observations: list[np.ndarray], covariances: list[np.ndarray],
-                  ids: list[np.ndarray], params: FastSLAMParams, start_pose=(0.0, 0.0, 0.0)) -> SmoothingProblem:
+def build_problem(
+    course_log: CourseLog,
+    observations: list[np.ndarray],
+    covariances: list[np.ndarray],
+    ids: list[np.ndarray],
+    params: FastSLAMParams,
+    start_pose=(0.0, 0.0, 0.0),
+) -> SmoothingProblem:
     """A ``SmoothingProblem`` from a log and its scans' associated observations.
 
     Args:
@@ -218,13 +230,17 @@ def build_problem(course_log: CourseLog, observations: list[np.ndarray], covaria
     if not len(scan_records):
         raise ValueError(f"{course_log.source}: the log has no scan records, so no poses to estimate")
     if not len(observations) == len(covariances) == len(ids) == len(scan_records):
-        raise ValueError(f"need observations, covariances and ids for each of the {len(scan_records)} scans, "
-                         f"got {len(observations)}, {len(covariances)} and {len(ids)}")
+        raise ValueError(
+            f"need observations, covariances and ids for each of the {len(scan_records)} scans, "
+            f"got {len(observations)}, {len(covariances)} and {len(ids)}"
+        )
     # 1. Odometry factors: the records since the previous scan (or the start), composed.
     increments = course_log.increments
     bounds = np.concatenate([[0], scan_records + 1])
-    composed = [compose_odometry(increments[a:b], params.sigmaX, params.sigmaTH, params.sigmaTH_drive)
-                for a, b in itertools.pairwise(bounds)]
+    composed = [
+        compose_odometry(increments[a:b], params.sigmaX, params.sigmaTH, params.sigmaTH_drive)
+        for a, b in itertools.pairwise(bounds)
+    ]
     odometry = np.array([z for z, _ in composed]).reshape(-1, 3)
     odometry_covariances = np.array([c for _, c in composed]).reshape(-1, 3, 3) + MOTION_FLOOR_VARIANCE * np.eye(3)
     # 2. Observation factors: the named observations, with FastSLAM's noise.
@@ -239,11 +255,23 @@ def build_problem(course_log: CourseLog, observations: list[np.ndarray], covaria
     poses = dead_reckoning(course_log, start_pose)[scan_records]
     first = np.unique(which, return_index=True)[1]
     landmarks = np.array([transform_points(poses[seen_from[k]], polar_to_cartesian(*z[k])) for k in first])
-    return SmoothingProblem(start_pose, scan_records, odometry, odometry_covariances, z, noise, seen_from, which,
-                            landmark_ids, poses, landmarks.reshape(-1, 2))
+    return SmoothingProblem(
+        start_pose,
+        scan_records,
+        odometry,
+        odometry_covariances,
+        z,
+        noise,
+        seen_from,
+        which,
+        landmark_ids,
+        poses,
+        landmarks.reshape(-1, 2),
+    )
 
 
 # -- the solver -----------------------------------------------------------------------------------
+
 
 def solve(problem: SmoothingProblem, max_iterations: int = 50, step_tolerance: float = 1e-7) -> SmoothingResult:
     """The MAP estimate of ``problem`` by Levenberg-Marquardt with a sparse Jacobian.
@@ -285,8 +313,18 @@ def solve(problem: SmoothingProblem, max_iterations: int = 50, step_tolerance: f
     # 3. Covariances from the information matrix at the optimum.
     pose_covariances, landmark_covariances = marginal_covariances(j.T @ j, ((pose_count, 3), (landmark_count, 2)))
     degrees_of_freedom = len(r) - (3 * pose_count + 2 * landmark_count)
-    return SmoothingResult(problem.scan_records, poses, pose_covariances, problem.landmark_ids, landmarks,
-                           landmark_covariances, iterations, chi2, degrees_of_freedom, bool(converged))
+    return SmoothingResult(
+        problem.scan_records,
+        poses,
+        pose_covariances,
+        problem.landmark_ids,
+        landmarks,
+        landmark_covariances,
+        iterations,
+        chi2,
+        degrees_of_freedom,
+        bool(converged),
+    )
 
 
 def marginal_covariances(information: scipy.sparse.sparray, sizes: tuple[tuple[int, int], ...]) -> list[np.ndarray]:
@@ -312,8 +350,13 @@ def _whitener(covariances: np.ndarray) -> np.ndarray:
     return np.linalg.inv(np.linalg.cholesky(covariances))
 
 
-def _whitened_system(problem: SmoothingProblem, poses: np.ndarray, landmarks: np.ndarray,
-                     odometry_whitener: np.ndarray, observation_whitener: np.ndarray):
+def _whitened_system(
+    problem: SmoothingProblem,
+    poses: np.ndarray,
+    landmarks: np.ndarray,
+    odometry_whitener: np.ndarray,
+    observation_whitener: np.ndarray,
+):
     """The whitened residual (M,) and sparse Jacobian (M, 3S + 2L) at ``poses`` (S, 3), ``landmarks``
     (L, 2). Rows: 3 per odometry factor, then 2 per observation. Columns: the poses, then the landmarks."""
     s = len(poses)
@@ -322,8 +365,9 @@ def _whitened_system(problem: SmoothingProblem, poses: np.ndarray, landmarks: np
     r_odo, j_from, j_to = odometry_residual(previous, poses, problem.odometry)
     # 2. Observation factors.
     k = problem.observation_poses
-    r_obs, j_pose, j_landmark = range_bearing_residual(poses[k], landmarks[problem.observation_landmarks],
-                                                       problem.observations)
+    r_obs, j_pose, j_landmark = range_bearing_residual(
+        poses[k], landmarks[problem.observation_landmarks], problem.observations
+    )
     # 3. Whiten and place the blocks.
     w_odo, w_obs = odometry_whitener, observation_whitener
     blocks = [
@@ -336,8 +380,9 @@ def _whitened_system(problem: SmoothingProblem, poses: np.ndarray, landmarks: np
     shape = (3 * s + 2 * len(k), 3 * s + 2 * len(landmarks))
     entries = (np.concatenate(values), (np.concatenate(rows), np.concatenate(columns)))
     jacobian = scipy.sparse.csr_array(entries, shape)
-    residual = np.concatenate([np.einsum("nij,nj->ni", w_odo, r_odo).ravel(),
-                               np.einsum("nij,nj->ni", w_obs, r_obs).ravel()])
+    residual = np.concatenate(
+        [np.einsum("nij,nj->ni", w_odo, r_odo).ravel(), np.einsum("nij,nj->ni", w_obs, r_obs).ravel()]
+    )
     return residual, jacobian
 
 
@@ -352,12 +397,13 @@ def _block_entries(blocks: np.ndarray, first_rows: np.ndarray, first_columns: np
 def _moved(poses: np.ndarray, landmarks: np.ndarray, step: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Poses (S, 3) and landmarks (L, 2) moved by a step (3S + 2L,), headings wrapped."""
     s = len(poses)
-    new_poses = poses + step[:3 * s].reshape(-1, 3)
+    new_poses = poses + step[: 3 * s].reshape(-1, 3)
     new_poses[:, 2] = wrap_angle(new_poses[:, 2])
-    return new_poses, landmarks + step[3 * s:].reshape(-1, 2)
+    return new_poses, landmarks + step[3 * s :].reshape(-1, 2)
 
 
 # -- whole logs -----------------------------------------------------------------------------------
+
 
 def expand_to_records(course_log: CourseLog, result: SmoothingResult, start_pose=(0.0, 0.0, 0.0)) -> np.ndarray:
     """Poses (R, 3) at every record of ``course_log``, like FastSLAM's: each record's pose is the
@@ -370,8 +416,9 @@ def expand_to_records(course_log: CourseLog, result: SmoothingResult, start_pose
     return compose(anchor_pose, relative(anchor_reckoned, reckoned))
 
 
-def smooth_known_association(course_log: CourseLog, extractor: CornerExtractor, identify,
-                             params: FastSLAMParams, start_pose=(0.0, 0.0, 0.0)) -> SmoothingResult:
+def smooth_known_association(
+    course_log: CourseLog, extractor: CornerExtractor, identify, params: FastSLAMParams, start_pose=(0.0, 0.0, 0.0)
+) -> SmoothingResult:
     """The MAP estimate of a scan log with known association.
 
     Extracts the corners of every scan with ``extractor``, names them with

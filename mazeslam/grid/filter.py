@@ -90,8 +90,9 @@ class GridSlamParams:
     resample_threshold: float = 0.5
     observation_gain: float = 3.0
     window_margin: float = 1.5
-    rescue: CorrelativeParams = field(default_factory=lambda: CorrelativeParams(
-        resolution=0.1, sigma=0.1, turn_step=2.0, candidates=3, max_points=90))
+    rescue: CorrelativeParams = field(
+        default_factory=lambda: CorrelativeParams(resolution=0.1, sigma=0.1, turn_step=2.0, candidates=3, max_points=90)
+    )
     rescue_sigma: tuple = (0.4, 0.3)
     map_corrected_motion: bool = True
     rescue_below: float = 0.8
@@ -107,8 +108,9 @@ class GridSlamParams:
         require(self.linear_update >= 0 and self.angular_update >= 0, "update thresholds must be >= 0")
         require(len(self.kernel_step) == 3 and all(s > 0 for s in self.kernel_step), "kernel_step: 3 positive steps")
         require(0 <= self.resample_threshold <= 1, "resample_threshold must be a fraction")
-        require(self.observation_gain > 0 and self.motion_floor > 0,
-                "observation_gain and motion_floor must be positive")
+        require(
+            self.observation_gain > 0 and self.motion_floor > 0, "observation_gain and motion_floor must be positive"
+        )
 
     @property
     def rescue_covariance(self) -> np.ndarray:
@@ -173,8 +175,9 @@ class GridSlam:
             reach = np.vstack([transform_points(predicted, rays.reach), predicted[:2]])
             window = grid.window(*grid.tile_range(reach, self.params.window_margin))
             if grid.tiles and len(points) >= 3:
-                field = LikelihoodField(window.crop(transform_points(predicted, points), self.params.window_margin),
-                                        self.params.match)
+                field = LikelihoodField(
+                    window.crop(transform_points(predicted, points), self.params.window_margin), self.params.match
+                )
                 if field.has_occupied:
                     pose, log_etas[index], accepted = self._propose(field, points, predicted, information)
                     if not accepted:
@@ -189,8 +192,9 @@ class GridSlam:
         self.log_weights += (log_etas - log_etas.max()) / (self.params.observation_gain * len(self.poses))
         return matched / len(self.poses), effective_sample_size(self.weights), self._resample_if_needed()
 
-    def _propose(self, field: LikelihoodField, points: np.ndarray, predicted: np.ndarray,
-                 information: np.ndarray) -> tuple[np.ndarray, float, bool]:
+    def _propose(
+        self, field: LikelihoodField, points: np.ndarray, predicted: np.ndarray, information: np.ndarray
+    ) -> tuple[np.ndarray, float, bool]:
         """The improved proposal of one particle: the drawn pose (3,), ``log eta`` and whether the
         match was accepted (if not, the pose is the stencil's centre and the caller draws one)."""
         match = self.params.match
@@ -219,8 +223,9 @@ class GridSlam:
         grid = LikelihoodGrid(field.occupied_points(), self.params.rescue)
         seeds = np.vstack([predicted, correlative_candidates(grid, points, predicted, covariance, self.params.rescue)])
         information = np.linalg.inv(covariance)
-        refined = np.array([refine_pose(field, points, predicted, information, self.params.match, seed)
-                            for seed in seeds])
+        refined = np.array(
+            [refine_pose(field, points, predicted, information, self.params.match, seed) for seed in seeds]
+        )
         return refined[np.argmax(field.objective(refined, points, predicted, information, self.params.match))]
 
     def _map_corrected_motion(self, motion: np.ndarray, points: np.ndarray) -> np.ndarray:
@@ -315,8 +320,9 @@ class GridSlamResult:
     def total_seconds(self) -> float:
         return float(self.seconds.sum() + self.motion_seconds)
 
-    def record_trajectory(self, course_log: CourseLog, start_pose,
-                          which: str = "best") -> tuple[np.ndarray, np.ndarray]:
+    def record_trajectory(
+        self, course_log: CourseLog, start_pose, which: str = "best"
+    ) -> tuple[np.ndarray, np.ndarray]:
         """Poses (R, 3) and covariances (R, 3, 3) at every record of ``course_log``, as
         ``sidecars.write_trajectory`` takes them: a record keeps the pose of the last scan at or
         before it (``start_pose`` and zero covariance before the first). ``which``: "best" or "mean"."""
@@ -337,8 +343,13 @@ def scan_motions(course_log: CourseLog, geometry: BeamGeometry, params: GridSlam
     return np.array([wheel_motion(course_log, first, last)[0] for first, last in zip(previous, records)]).reshape(-1, 3)
 
 
-def run_grid_slam(course_log: CourseLog, geometry: BeamGeometry, start_pose, params: GridSlamParams | None = None,
-                  progress: bool = False) -> GridSlamResult:
+def run_grid_slam(
+    course_log: CourseLog,
+    geometry: BeamGeometry,
+    start_pose,
+    params: GridSlamParams | None = None,
+    progress: bool = False,
+) -> GridSlamResult:
     """The grid filter over every scan of ``course_log`` (see the module docstring)."""
     params = params or GridSlamParams()
     began = time.perf_counter()
@@ -366,9 +377,22 @@ def run_grid_slam(course_log: CourseLog, geometry: BeamGeometry, start_pose, par
         node_parents[index] = parents
         seconds[index] = time.perf_counter() - started
     best = slam.best_particle()
-    return GridSlamResult(records, course_log.times[records], _backtrack(node_poses, node_parents, best), mean_poses,
-                          covariances, processed, matched, neff, resampled, slam.maps[best], seconds, motion_seconds,
-                          peak_map_bytes, slam)
+    return GridSlamResult(
+        records,
+        course_log.times[records],
+        _backtrack(node_poses, node_parents, best),
+        mean_poses,
+        covariances,
+        processed,
+        matched,
+        neff,
+        resampled,
+        slam.maps[best],
+        seconds,
+        motion_seconds,
+        peak_map_bytes,
+        slam,
+    )
 
 
 def _backtrack(node_poses: np.ndarray, node_parents: np.ndarray, particle: int) -> np.ndarray:

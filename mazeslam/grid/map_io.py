@@ -58,8 +58,13 @@ def to_image(states: np.ndarray) -> np.ndarray:
     return np.flipud(image.T)
 
 
-def write_map(occupancy: OccupancyMap, folder: str | Path, name: str = "occupancy",
-              occupied_thresh: float = 0.65, free_thresh: float = 0.196) -> Path:
+def write_map(
+    occupancy: OccupancyMap,
+    folder: str | Path,
+    name: str = "occupancy",
+    occupied_thresh: float = 0.65,
+    free_thresh: float = 0.196,
+) -> Path:
     """Write ``name.pgm``, ``name.yaml`` and ``name.png`` into ``folder``; returns the YAML's path."""
     folder = Path(folder)
     folder.mkdir(parents=True, exist_ok=True)
@@ -67,9 +72,14 @@ def write_map(occupancy: OccupancyMap, folder: str | Path, name: str = "occupanc
     height, width = image.shape
     (folder / f"{name}.pgm").write_bytes(f"P5\n{width} {height}\n255\n".encode() + image.tobytes())
     cv2.imwrite(str(folder / f"{name}.png"), image)
-    description = {"image": f"{name}.pgm", "resolution": float(occupancy.resolution),
-                   "origin": [float(value) for value in occupancy.origin], "negate": 0,
-                   "occupied_thresh": occupied_thresh, "free_thresh": free_thresh}
+    description = {
+        "image": f"{name}.pgm",
+        "resolution": float(occupancy.resolution),
+        "origin": [float(value) for value in occupancy.origin],
+        "negate": 0,
+        "occupied_thresh": occupied_thresh,
+        "free_thresh": free_thresh,
+    }
     path = folder / f"{name}.yaml"
     path.write_text(yaml.safe_dump(description, sort_keys=False))
     return path
@@ -89,5 +99,6 @@ def read_map(yaml_path: str | Path) -> OccupancyMap:
     states = np.full(image.shape, UNKNOWN, dtype=np.int8)
     states[occupied < description["free_thresh"]] = FREE
     states[occupied > description["occupied_thresh"]] = OCCUPIED
-    return OccupancyMap(np.flipud(states).T.copy(), float(description["resolution"]),
-                        np.asarray(description["origin"], dtype=float))
+    return OccupancyMap(
+        np.flipud(states).T.copy(), float(description["resolution"]), np.asarray(description["origin"], dtype=float)
+    )

@@ -55,8 +55,10 @@ class MatchParams:
 
     def __post_init__(self):
         object.__setattr__(self, "sigma_schedule", tuple(self.sigma_schedule))
-        require(self.sigma > 0 and self.floor > 0 and all(s > 0 for s in self.sigma_schedule),
-                "sigma, floor and sigma_schedule must be positive")
+        require(
+            self.sigma > 0 and self.floor > 0 and all(s > 0 for s in self.sigma_schedule),
+            "sigma, floor and sigma_schedule must be positive",
+        )
         require(self.iterations >= 1 and self.max_points >= 3, "need iterations >= 1 and max_points >= 3")
         require(0 <= self.min_overlap <= 1, "min_overlap must be a fraction")
 
@@ -95,13 +97,24 @@ class LikelihoodField:
     def log_likelihood(self, poses: np.ndarray, points: np.ndarray, params: MatchParams) -> np.ndarray:
         """``log p(z | m, x)`` (K,) of end points ``points`` (N, 2) (robot frame) at ``poses`` (K, 3)."""
         cos_t, sin_t = np.cos(poses[:, 2:3]), np.sin(poses[:, 2:3])
-        world = np.stack([poses[:, :1] + cos_t * points[:, 0] - sin_t * points[:, 1],
-                          poses[:, 1:2] + sin_t * points[:, 0] + cos_t * points[:, 1]], axis=-1)
+        world = np.stack(
+            [
+                poses[:, :1] + cos_t * points[:, 0] - sin_t * points[:, 1],
+                poses[:, 1:2] + sin_t * points[:, 0] + cos_t * points[:, 1],
+            ],
+            axis=-1,
+        )
         distance, _ = self.lookup(world)
         return params.scale * np.log(np.exp(-0.5 * (distance / params.sigma) ** 2) + params.floor).sum(axis=-1)
 
-    def objective(self, poses: np.ndarray, points: np.ndarray, prior: np.ndarray, prior_information: np.ndarray,
-                  params: MatchParams) -> np.ndarray:
+    def objective(
+        self,
+        poses: np.ndarray,
+        points: np.ndarray,
+        prior: np.ndarray,
+        prior_information: np.ndarray,
+        params: MatchParams,
+    ) -> np.ndarray:
         """``log p(z | m, x)`` plus the Gaussian prior's log density (up to a constant) at ``poses`` (K, 3)."""
         offsets = poses - prior
         offsets[:, 2] = wrap_angle(offsets[:, 2])
@@ -122,8 +135,14 @@ def match_points(ranges: np.ndarray, bearings: np.ndarray, mount: np.ndarray, pa
     return points[:: -(-len(points) // params.max_points)] if len(points) else points
 
 
-def refine_pose(field: LikelihoodField, points: np.ndarray, prior: np.ndarray, prior_information: np.ndarray,
-                params: MatchParams, start: np.ndarray | None = None) -> np.ndarray:
+def refine_pose(
+    field: LikelihoodField,
+    points: np.ndarray,
+    prior: np.ndarray,
+    prior_information: np.ndarray,
+    params: MatchParams,
+    start: np.ndarray | None = None,
+) -> np.ndarray:
     """The pose (3,) maximising the likelihood of ``points`` (N, 2) (robot frame) times the Gaussian
     motion prior (mean ``prior`` (3,), information (3, 3)), from ``start`` (default ``prior``).
 
@@ -135,8 +154,9 @@ def refine_pose(field: LikelihoodField, points: np.ndarray, prior: np.ndarray, p
     for sigma in params.sigma_schedule:
         for _ in range(params.iterations):
             cos_t, sin_t = np.cos(pose[2]), np.sin(pose[2])
-            arm = np.column_stack([cos_t * points[:, 0] - sin_t * points[:, 1],
-                                   sin_t * points[:, 0] + cos_t * points[:, 1]])
+            arm = np.column_stack(
+                [cos_t * points[:, 0] - sin_t * points[:, 1], sin_t * points[:, 0] + cos_t * points[:, 1]]
+            )
             distance, gradient = field.lookup(pose[:2] + arm)
             jacobian = np.column_stack([gradient, gradient[:, 1] * arm[:, 0] - gradient[:, 0] * arm[:, 1]])
             likelihood = np.exp(-0.5 * (distance / sigma) ** 2)

@@ -88,7 +88,7 @@ class TiledGrid:
         for (a, b), tile in self.tiles.items():
             if lower[0] <= a < upper[0] and lower[1] <= b < upper[1]:
                 i, j = (a - lower[0]) * size, (b - lower[1]) * size
-                values[i:i + size, j:j + size] = tile
+                values[i : i + size, j : j + size] = tile
         return Window(values, lower * self.tile_metres, self.params.resolution, lower)
 
     def store(self, window: Window, changed: np.ndarray) -> None:
@@ -98,7 +98,7 @@ class TiledGrid:
         tiles_x, tiles_y = changed.shape[0] // size, changed.shape[1] // size
         touched = changed.reshape(tiles_x, size, tiles_y, size).any(axis=(1, 3))
         for a, b in zip(*np.nonzero(touched)):
-            block = window.values[a * size:(a + 1) * size, b * size:(b + 1) * size]
+            block = window.values[a * size : (a + 1) * size, b * size : (b + 1) * size]
             self.tiles[(int(window.lower_tile[0] + a), int(window.lower_tile[1] + b))] = block.copy()
 
     def dense(self) -> tuple[np.ndarray, np.ndarray]:
@@ -134,8 +134,12 @@ class Window:
         high = np.ceil((points.max(axis=0) + margin - self.origin) / self.resolution).astype(int)
         low = np.clip(low, 0, np.array(self.values.shape) - 2)
         high = np.clip(high, low + 2, self.values.shape)
-        return Window(self.values[low[0]:high[0], low[1]:high[1]], self.origin + low * self.resolution,
-                      self.resolution, self.lower_tile)
+        return Window(
+            self.values[low[0] : high[0], low[1] : high[1]],
+            self.origin + low * self.resolution,
+            self.resolution,
+            self.lower_tile,
+        )
 
     def cells(self, points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """The window cells (i (K,), j (K,)) of those of world ``points`` (N, 2) inside the window."""

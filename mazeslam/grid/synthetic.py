@@ -19,8 +19,12 @@ from mazeslam.geometry import advance_pose, wrap_angle
 from mazeslam.log import LogWriter
 
 #: The laser: a front fan from -90 to +90 degrees, one beam a degree, centimetre noise.
-LASER = LaserParams(beams=181, max_range=20.0, range_noise_std=0.01,
-                    geometry=BeamGeometry(first_beam_angle=-np.pi / 2, field_of_view=np.pi))
+LASER = LaserParams(
+    beams=181,
+    max_range=20.0,
+    range_noise_std=0.01,
+    geometry=BeamGeometry(first_beam_angle=-np.pi / 2, field_of_view=np.pi),
+)
 
 
 def _box(x_low: float, y_low: float, x_high: float, y_high: float) -> list[list[float]]:
@@ -55,8 +59,14 @@ class SimulatedLog:
     geometry: BeamGeometry
 
 
-def simulate_building_log(path: str | Path, laps: float = 1.3, step: float = 0.1, scan_every: int = 5,
-                          heading_bias: float = 0.02, seed: int = 0) -> SimulatedLog:
+def simulate_building_log(
+    path: str | Path,
+    laps: float = 1.3,
+    step: float = 0.1,
+    scan_every: int = 5,
+    heading_bias: float = 0.02,
+    seed: int = 0,
+) -> SimulatedLog:
     """Drive ``laps`` times round the corridor ring of ``building_walls`` and write the log.
 
     Odometry records come every ``step`` metres (or radians, turning in place at the corners): the

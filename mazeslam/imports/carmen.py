@@ -186,6 +186,7 @@ def import_carmen(path: str | Path, out: str | Path) -> dict:
         return t
 
     with LogWriter(out, carmen.n_beams) as writer:
+
         def step(t, pose):
             nonlocal anchor
             if anchor is not None:
@@ -217,9 +218,14 @@ def import_carmen(path: str | Path, out: str | Path) -> dict:
                 counts["scans"] += 1
     sidecars.write_truth(sidecars.truth_path(out), np.array(times), np.array(poses))
     sensor = {"beams": carmen.n_beams, "max_range": max_range, **front_laser(carmen.n_beams).to_dict()}
-    sidecars.write_map(sidecars.map_path(out), np.empty((0, 4)), np.empty((0, 2)), sensor,
-                       start_pose=np.asarray(poses[0]).tolist() if poses else [0.0, 0.0, 0.0],
-                       truth_kind="reference: poses of a grid-mapping run (gmapping), not ground truth",
-                       source={"carmen_log": str(path), "ignored": dict(carmen.ignored)})
+    sidecars.write_map(
+        sidecars.map_path(out),
+        np.empty((0, 4)),
+        np.empty((0, 2)),
+        sensor,
+        start_pose=np.asarray(poses[0]).tolist() if poses else [0.0, 0.0, 0.0],
+        truth_kind="reference: poses of a grid-mapping run (gmapping), not ground truth",
+        source={"carmen_log": str(path), "ignored": dict(carmen.ignored)},
+    )
     counts.update({f"ignored {k} lines": v for k, v in carmen.ignored.items()})
     return dict(counts)

@@ -94,17 +94,29 @@ def import_mrclam(folder: str | Path, robot: int, out: str | Path) -> dict:
     poses = _interpolate_poses(truth, record_times)
     sidecars.write_truth(sidecars.truth_path(out), record_times, poses)
     sidecars.write_map(
-        sidecars.map_path(out), walls=np.empty((0, 4)), corners=landmarks[:, 1:3],
+        sidecars.map_path(out),
+        walls=np.empty((0, 4)),
+        corners=landmarks[:, 1:3],
         sensor={"kind": "landmark range and bearing (monocular camera with barcodes)"},
-        landmark_ids=landmarks[:, 0].astype(int).tolist(), start_pose=poses[0].tolist(),
+        landmark_ids=landmarks[:, 0].astype(int).tolist(),
+        start_pose=poses[0].tolist(),
         source={"dataset": str(folder), "robot": robot, "ground_truth": "Vicon motion capture"},
     )
-    return {"records": len(records), "odometry_records": len(times), "landmark_records": len(kept),
-            "skipped": dict(skipped)}
+    return {
+        "records": len(records),
+        "odometry_records": len(times),
+        "landmark_records": len(kept),
+        "skipped": dict(skipped),
+    }
 
 
 def _interpolate_poses(truth: np.ndarray, times: np.ndarray) -> np.ndarray:
     """Vicon poses (x, y, theta) at ``times``, linearly interpolated (theta unwrapped), clipped to its span."""
     heading = np.unwrap(truth[:, 3])
-    return np.column_stack([np.interp(times, truth[:, 0], truth[:, 1]), np.interp(times, truth[:, 0], truth[:, 2]),
-                            wrap_angle(np.interp(times, truth[:, 0], heading))])
+    return np.column_stack(
+        [
+            np.interp(times, truth[:, 0], truth[:, 1]),
+            np.interp(times, truth[:, 0], truth[:, 2]),
+            wrap_angle(np.interp(times, truth[:, 0], heading)),
+        ]
+    )

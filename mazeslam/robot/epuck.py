@@ -37,8 +37,9 @@ class EPuck(Robot):
         robot: wheel radius, wheelbase, steps per revolution.
     """
 
-    def __init__(self, port, scanner=None, robot: RobotParams | None = None, baudrate: int = 115200,
-                 timeout: float = 0.5):
+    def __init__(
+        self, port, scanner=None, robot: RobotParams | None = None, baudrate: int = 115200, timeout: float = 0.5
+    ):
         self.robot = robot or RobotParams()
         self.scanner = scanner
         self.metres_per_step = 2 * math.pi * self.robot.wheel_radius / self.robot.encoder_steps_per_revolution
@@ -74,8 +75,10 @@ class EPuck(Robot):
         return fields[1:]
 
     def set_wheel_speeds(self, left: float, right: float) -> None:
-        steps = [int(np.clip(round(v / self.metres_per_step), -MAX_STEPS_PER_SECOND, MAX_STEPS_PER_SECOND))
-                 for v in (left, right)]
+        steps = [
+            int(np.clip(round(v / self.metres_per_step), -MAX_STEPS_PER_SECOND, MAX_STEPS_PER_SECOND))
+            for v in (left, right)
+        ]
         self._command(f"D,{steps[0]},{steps[1]}", "d")
 
     def read_counts(self) -> tuple[int, int]:

@@ -54,12 +54,16 @@ class CameraCalibration:
     def __post_init__(self):
         require(0 <= self.inner_radius < self.outer_radius, "need 0 <= inner_radius < outer_radius (pixels)")
         require(self.height > 0 and self.alpha > 0, "height and alpha must be positive")
-        require(self.threshold == "otsu" or (isinstance(self.threshold, int) and 0 < self.threshold < 256),
-                f"threshold must be 1..255 or 'otsu', got {self.threshold!r}")
+        require(
+            self.threshold == "otsu" or (isinstance(self.threshold, int) and 0 < self.threshold < 256),
+            f"threshold must be 1..255 or 'otsu', got {self.threshold!r}",
+        )
         require(len(self.table_radii) == len(self.table_distances), "lookup table radii and distances differ in length")
-        require(len(self.table_radii) > 0 or self.outer_radius < self.alpha * np.pi / 2,
-                f"outer_radius {self.outer_radius} px reaches past the mirror model's horizon "
-                f"(alpha pi / 2 = {self.alpha * np.pi / 2:.0f} px)")
+        require(
+            len(self.table_radii) > 0 or self.outer_radius < self.alpha * np.pi / 2,
+            f"outer_radius {self.outer_radius} px reaches past the mirror model's horizon "
+            f"(alpha pi / 2 = {self.alpha * np.pi / 2:.0f} px)",
+        )
 
     def distance(self, rho: np.ndarray) -> np.ndarray:
         """Floor distance (m) seen at pixel radius ``rho``."""
@@ -78,8 +82,9 @@ class CameraCalibration:
 RADIAL_STEP = 0.25
 
 
-def image_to_ranges(image: np.ndarray, calibration: CameraCalibration, geometry: BeamGeometry,
-                    n_beams: int) -> np.ndarray:
+def image_to_ranges(
+    image: np.ndarray, calibration: CameraCalibration, geometry: BeamGeometry, n_beams: int
+) -> np.ndarray:
     """Ranges (N,) in metres in the beam order of ``geometry``, 0 where no wall is seen.
 
     The ring is unwarped into one row per beam (``cv2.remap``, bilinear, every ``RADIAL_STEP``
@@ -94,11 +99,13 @@ def image_to_ranges(image: np.ndarray, calibration: CameraCalibration, geometry:
     bearings = geometry.bearings(n_beams)
     map_x = (calibration.center_x - radii[None, :] * np.sin(bearings)[:, None]).astype(np.float32)
     map_y = (calibration.center_y - radii[None, :] * np.cos(bearings)[:, None]).astype(np.float32)
-    polar = cv2.remap(grey.astype(np.float32), map_x, map_y, cv2.INTER_LINEAR, borderMode=cv2.BORDER_CONSTANT,
-                      borderValue=255.0)  # (N, R): one row per beam
+    polar = cv2.remap(
+        grey.astype(np.float32), map_x, map_y, cv2.INTER_LINEAR, borderMode=cv2.BORDER_CONSTANT, borderValue=255.0
+    )  # (N, R): one row per beam
     if calibration.threshold == "otsu":  # chosen from the ring alone, not the robot or the rim
-        threshold, _ = cv2.threshold(np.clip(polar, 0, 255).astype(np.uint8), 0, 255,
-                                     cv2.THRESH_BINARY + cv2.THRESH_OTSU)
+        threshold, _ = cv2.threshold(
+            np.clip(polar, 0, 255).astype(np.uint8), 0, 255, cv2.THRESH_BINARY + cv2.THRESH_OTSU
+        )
     else:
         threshold = float(calibration.threshold)
     dark = polar < threshold
@@ -117,8 +124,16 @@ def detect_mirror(image: np.ndarray) -> tuple[float, float, float]:
     (Hough transform); for calibrating without clicks."""
     grey = image if image.ndim == 2 else cv2.cvtColor(image, cv2.COLOR_BGR2GRAY)
     smallest = min(grey.shape)
-    circles = cv2.HoughCircles(cv2.GaussianBlur(grey, (5, 5), 1.5), cv2.HOUGH_GRADIENT, dp=1, minDist=smallest,
-                               param1=100, param2=30, minRadius=smallest // 4, maxRadius=smallest // 2)
+    circles = cv2.HoughCircles(
+        cv2.GaussianBlur(grey, (5, 5), 1.5),
+        cv2.HOUGH_GRADIENT,
+        dp=1,
+        minDist=smallest,
+        param1=100,
+        param2=30,
+        minRadius=smallest // 4,
+        maxRadius=smallest // 2,
+    )
     if circles is None:
         raise RobotError("no mirror found in the image: give its centre and outer radius instead")
     x, y, radius = circles[0][0]

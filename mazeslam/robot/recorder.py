@@ -111,8 +111,18 @@ class Recorder:
     """Drives ``robot`` and writes ``out`` (course log) and its map sidecar (beam geometry);
     for a ``SimulatedRobot`` also the truth sidecar and the walls."""
 
-    def __init__(self, robot: Robot, out: str | Path, beams: int, geometry: BeamGeometry, scan_period: float = 0.75,
-                 odometry_rate: float = 5.0, wheelbase: float = 0.053, clock=None, wait=None):
+    def __init__(
+        self,
+        robot: Robot,
+        out: str | Path,
+        beams: int,
+        geometry: BeamGeometry,
+        scan_period: float = 0.75,
+        odometry_rate: float = 5.0,
+        wheelbase: float = 0.053,
+        clock=None,
+        wait=None,
+    ):
         if scan_period <= 0 or odometry_rate <= 0:
             raise ValueError("scan_period and odometry_rate must be positive")
         self.robot, self.out, self.beams, self.geometry = robot, Path(out), beams, geometry
@@ -162,8 +172,9 @@ class Recorder:
                 if status is not None:
                     status(t, command, self.records)
         except RobotDisconnected as error:
-            raise RobotDisconnected(f"{error}; the log {self.out} keeps the {self.records} records written "
-                                    f"before it") from error
+            raise RobotDisconnected(
+                f"{error}; the log {self.out} keeps the {self.records} records written before it"
+            ) from error
         finally:
             self._restore_signals(previous)
             writer.close()
@@ -207,9 +218,20 @@ class Recorder:
         sensor = {"beams": self.beams, **self.geometry.to_dict()}
         if isinstance(self.robot, SimulatedRobot):
             walls = self.robot.walls
-            sidecars.write_map(sidecars.map_path(self.out), walls.surfaces, walls.corners, sensor,
-                               corner_convex=walls.corner_convex.tolist(), start_pose=self.robot.start_pose.tolist(),
-                               source="mazeslam record --sim")
+            sidecars.write_map(
+                sidecars.map_path(self.out),
+                walls.surfaces,
+                walls.corners,
+                sensor,
+                corner_convex=walls.corner_convex.tolist(),
+                start_pose=self.robot.start_pose.tolist(),
+                source="mazeslam record --sim",
+            )
         else:
-            sidecars.write_map(sidecars.map_path(self.out), np.empty((0, 4)), np.empty((0, 2)), sensor,
-                               source="mazeslam record (real robot: no ground truth)")
+            sidecars.write_map(
+                sidecars.map_path(self.out),
+                np.empty((0, 4)),
+                np.empty((0, 2)),
+                sensor,
+                source="mazeslam record (real robot: no ground truth)",
+            )
