@@ -121,6 +121,12 @@ class SensorOverrides:
         """``geometry`` with the given settings replaced."""
         return dataclasses.replace(geometry, **{name: getattr(self, name) for name in self.given()})
 
+    def apply_described(self, geometry: BeamGeometry, origin: str) -> tuple[BeamGeometry, str]:
+        """``apply`` and the geometry's ``origin`` (for messages) saying which settings replaced its own."""
+        if not self.given():
+            return geometry, origin
+        return self.apply(geometry), f"{origin}, overridden by {', '.join(sorted(self.given()))}"
+
 
 #: The exercise's MATLAB code: beam k at -pi + k 2pi/N, counter-clockwise. The simulator's default.
 EXERCISE_CONVENTION = BeamGeometry(first_beam_angle=-np.pi, direction=1)

@@ -103,9 +103,7 @@ def load_run(path: str | Path, sensor: SensorOverrides | None = None, strict: bo
         geometry, origin = sidecars.beam_geometry(world["sensor"]), f"sidecar {map_file}"
     else:
         geometry, origin = EXERCISE_CONVENTION, "assumed: the exercise's convention (no sidecar)"
-    sensor = sensor or SensorOverrides()
-    if sensor.given():
-        geometry, origin = sensor.apply(geometry), f"{origin}, overridden by {', '.join(sorted(sensor.given()))}"
+    geometry, origin = (sensor or SensorOverrides()).apply_described(geometry, origin)
     start = (world or {}).get("start_pose")
     start_pose = np.asarray(start if start is not None else (0.0, 0.0, 0.0), dtype=float)
     return LoadedRun(path, course_log, geometry, origin, start_pose, truth, world)

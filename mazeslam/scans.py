@@ -53,9 +53,7 @@ def load_scans(path: str | Path, sensor: SensorOverrides | None = None, strict: 
     sensor = sensor or SensorOverrides()
     if is_carmen(path):
         carmen = read_carmen(path)
-        geometry, origin = front_laser(carmen.n_beams), "CARMEN front laser"
-        if sensor.given():
-            geometry, origin = sensor.apply(geometry), f"{origin}, overridden by {', '.join(sorted(sensor.given()))}"
+        geometry, origin = sensor.apply_described(front_laser(carmen.n_beams), "CARMEN front laser")
         return ScanSet(str(path), carmen.scan_times, np.arange(len(carmen.scan_times)), carmen.ranges, geometry, origin)
     run = load_run(path, sensor, strict=strict)
     if run.log.n_beams is None:

@@ -20,6 +20,7 @@ from tqdm.auto import tqdm
 from mazeslam import log
 from mazeslam.beams import EXERCISE_CONVENTION, BeamGeometry, SensorOverrides
 from mazeslam.config import load_toml
+from mazeslam.filters.association import nearest_within
 from mazeslam.filters.corners import CornerExtractor, CornerParams
 from mazeslam.filters.fastslam import Association, FastSLAM, FastSLAMParams, UpdateReport
 from mazeslam.filters.scan_matching import LaserOdometry, ScanMatchParams, laser_odometry
@@ -245,13 +246,17 @@ def truth_identities(run: LoadedRun, radius: float):
     A diagnosis tool: it tells association errors apart from everything else."""
     if run.truth is None or run.world is None:
         raise ValueError(f"{run.path}: known association on scans needs the truth and map sidecars to name the corners")
-    truth, corners = run.truth, run.true_corners
+    return identities_along(run.truth, run.true_corners, radius)
+
+
+def identities_along(poses: np.ndarray, landmarks: np.ndarray, radius: float):
+    """``identify(record_index, observations (K, 2)) -> ids (K,)``: each observation named by the
+    landmark (L, 2) nearest to where the pose of its record (``poses`` (R, 3)) puts it, within
+    ``radius`` metres; -1 if none (``association.nearest_within``)."""
 
     def identify(record_index: int, observations: np.ndarray) -> np.ndarray:
-        world = transform_points(truth[record_index], polar_to_cartesian(observations[:, 0], observations[:, 1]))
-        distance = np.hypot(*(world[:, None, :] - corners[None]).transpose(2, 0, 1))
-        nearest = distance.argmin(axis=1)
-        return np.where(distance[np.arange(len(world)), nearest] <= radius, nearest, -1)
+        world = transform_points(poses[record_index], polar_to_cartesian(observations[:, 0], observations[:, 1]))
+        return nearest_within(world, landmarks, radius)
 
     return identify
 

@@ -29,7 +29,7 @@ import numpy as np
 
 from mazeslam import sidecars
 from mazeslam.beams import SensorOverrides
-from mazeslam.config import InputError, jsonable, read_text, with_changes
+from mazeslam.config import InputError, jsonable, read_text
 from mazeslam.evaluation.consistency import nees_summary
 from mazeslam.evaluation.metrics import (
     align_se2,
@@ -48,8 +48,7 @@ from mazeslam.filters.smoother import (
     smooth_known_association,
 )
 from mazeslam.loaded_run import LoadedRun, load_run
-from mazeslam.log import CourseLog
-from mazeslam.slam import SlamConfig, load_slam_config, truth_identities
+from mazeslam.slam import SlamConfig, identities_along, load_slam_config, truth_identities
 
 #: The optimum's row in error tables.
 OPTIMUM = "batch optimum"
@@ -79,23 +78,13 @@ def smooth_run(run: LoadedRun, config: SlamConfig, identify) -> Smoothed:
     if not run.log.is_scan.any() or run.log.is_landmark.any():
         raise ValueError(f"{run.path}: the smoother needs a log of scans (and no landmark records)")
     started = time.perf_counter()
-    course_log = _without_glitches(run, config.odometry.jump_tolerance)
+    course_log = run.log_without_glitches(config.odometry.jump_tolerance)
     extractor = CornerExtractor(run.geometry, course_log.width, config.corners)
     result = smooth_known_association(course_log, extractor, identify, config.fastslam, run.start_pose)
     poses = expand_to_records(course_log, result, run.start_pose)
     anchor = np.searchsorted(result.scan_records, np.arange(len(course_log)), side="right") - 1
     covariances = result.pose_covariances[np.maximum(anchor, 0)]
     return Smoothed(result, poses, covariances, time.perf_counter() - started)
-
-
-def _without_glitches(run: LoadedRun, jump_tolerance: float) -> CourseLog:
-    """``run.log`` with the odometry records longer than ``jump_tolerance`` metres moving nothing."""
-    glitches = run.glitches(jump_tolerance)
-    if not len(glitches):
-        return run.log
-    values = run.log.values.copy()
-    values[glitches, :2] = 0.0
-    return dataclasses.replace(run.log, values=values)
 
 
 def has_known_optimum(run: LoadedRun) -> bool:
@@ -166,9 +155,7 @@ def map_identities(run: LoadedRun, poses: np.ndarray, landmarks, radius: float):
     """``identify`` naming each observation by the nearest of a filter's ``landmarks`` (L, 2) within
     ``radius`` metres of where the filter's pose at that record (``poses`` (R, 3)) puts it; -1 if none.
     Ids are indices into ``landmarks``."""
-    # The nearest-within-radius naming of truth_identities, with the filter's path and map as the "truth".
-    landmarks = np.asarray(landmarks, dtype=float).reshape(-1, 2)
-    return truth_identities(dataclasses.replace(run, truth=np.asarray(poses), world={"corners": landmarks}), radius)
+    return identities_along(np.asarray(poses), np.asarray(landmarks, dtype=float).reshape(-1, 2), radius)
 
 
 def run_smooth_command(
@@ -177,8 +164,7 @@ def run_smooth_command(
     """Smooth, write ``out_dir``/{trajectory.csv, trajectory.tum, map.json, smooth.png}; return the
     lines to print. ``association``: "known" (the truth's corners) or "from-run" (``run_dir``'s map)."""
     config = load_slam_config(config_path)
-    sensor_changes = dataclasses.asdict(sensor or SensorOverrides())
-    config = dataclasses.replace(config, sensor=with_changes(config.sensor, **sensor_changes))
+    config = dataclasses.replace(config, sensor=(sensor or SensorOverrides()).over(config.sensor))
     run = load_run(log_file, config.sensor)
     radius = config.evaluation.match_radius
     if association == "known":

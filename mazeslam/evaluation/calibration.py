@@ -35,8 +35,8 @@ from mazeslam.evaluation.odometry_noise import MeasuredOdometryNoise, measure_mo
 from mazeslam.filters import ekf
 from mazeslam.filters.corners import CornerExtractor
 from mazeslam.filters.scan_matching import laser_odometry
-from mazeslam.geometry import polar_to_cartesian, transform_points
 from mazeslam.loaded_run import LoadedRun
+from mazeslam.slam import identities_along, slam_on_run
 
 #: Beams hitting a wall farther than this from its normal are left out (their range errors are
 #: poorly seen across the wall), radians.
@@ -154,23 +154,16 @@ def observation_residuals(
         radius: metres (the ``[evaluation] match_radius``).
     """
     rows = []
+    identify = identities_along(poses, landmarks, radius)
     for update, (record, observed_all, covariance_all, kinds) in enumerate(observations_by_record(run, extractor)):
-        if not len(landmarks) or not len(observed_all):
+        if not len(observed_all):
             continue
-        points = transform_points(poses[record], polar_to_cartesian(observed_all[:, 0], observed_all[:, 1]))
-        distances = np.linalg.norm(points[:, None, :] - landmarks[None], axis=2)  # (K, L)
-        predicted, _, _ = ekf.range_bearing(np.repeat(poses[record][None], len(landmarks), 0), landmarks)
-        for k, nearest in enumerate(distances.argmin(axis=1)):
-            if distances[k, nearest] <= radius:
-                rows.append(
-                    (
-                        ekf.innovation(observed_all[k], predicted[nearest]),
-                        covariance_all[k],
-                        kinds[k],
-                        int(nearest),
-                        update,
-                    )
-                )
+        named = identify(record, observed_all)
+        for k in np.flatnonzero(named >= 0):
+            predicted, _, _ = ekf.range_bearing(poses[record][None], landmarks[named[k]][None])
+            rows.append(
+                (ekf.innovation(observed_all[k], predicted[0]), covariance_all[k], kinds[k], int(named[k]), update)
+            )
     if not rows:
         return Residuals(
             np.empty((0, 2)), np.empty((0, 2, 2)), np.empty(0, dtype=str), np.empty(0, int), np.empty(0, int)
@@ -295,8 +288,6 @@ def calibrate(run: LoadedRun, config, progress: bool = False) -> Calibration:
     """Measure ``run``'s noises (see the module docstring) under the slam ``config``
     (``SlamConfig``: its corner settings, scan matching and, without truth, the filter that
     provides the reference path and map)."""
-    from mazeslam.slam import slam_on_run
-
     raw = dataclasses.replace(config.corners, covariance_scale={})  # measure the fits' own covariance
     extractor = CornerExtractor(run.geometry, run.log.width, raw) if run.log.n_beams else None
     range_noise = laser_range_noise(run.log.values[run.log.is_scan], extractor) if extractor is not None else None

@@ -38,6 +38,16 @@ def associate_greedy(distance2: np.ndarray, gate: float) -> np.ndarray:
     return assigned
 
 
+def nearest_within(points: np.ndarray, landmarks: np.ndarray, radius: float) -> np.ndarray:
+    """Index (K,) of the landmark (L, 2) nearest each of ``points`` (K, 2), or -1 where none lies
+    within ``radius`` (same units, metres). For naming observations by a reference map."""
+    if not len(landmarks):
+        return np.full(len(points), -1)
+    distance = np.linalg.norm(points[:, None, :] - landmarks[None], axis=2)  # (K, L)
+    nearest = distance.argmin(axis=1)
+    return np.where(distance[np.arange(len(points)), nearest] <= radius, nearest, -1)
+
+
 def associate_known(observation_ids: np.ndarray, slot_ids: np.ndarray, exists: np.ndarray) -> np.ndarray:
     """The slot holding each observation's known identity.
 

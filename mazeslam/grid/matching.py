@@ -17,7 +17,6 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-import cv2
 import numpy as np
 
 from mazeslam.config import require
@@ -67,6 +66,8 @@ class LikelihoodField:
     """The distance (m) from each cell of ``window`` to its nearest occupied cell, interpolated."""
 
     def __init__(self, window: Window, params: MatchParams):
+        import cv2  # here, not at the top: the slam config names the grid's settings, and OpenCV is slow to load
+
         self.occupied = window.values > params.occupied_threshold
         free = (~self.occupied).astype(np.uint8)
         self.has_occupied = bool(self.occupied.any())
