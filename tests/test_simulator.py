@@ -63,6 +63,7 @@ def test_other_beam_conventions_and_mounting_are_recorded_and_cast(tmp_path):
         "beams",
         "max_range",
         "min_range",
+        "model",
         "range_noise_std",
         "dropout",
         "first_beam_angle",

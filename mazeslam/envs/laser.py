@@ -7,19 +7,28 @@ range of 0 means "no return" (out of range or dropped), as in the course log for
 
 from __future__ import annotations
 
+import enum
 import math
-from dataclasses import dataclass, field, fields
+from dataclasses import asdict, dataclass, field, fields
 
 import numpy as np
 from numpy.typing import ArrayLike
 
 from mazeslam.beams import BeamGeometry
 from mazeslam.config import require
+from mazeslam.envs.omnicam_sensor import OmnicamParams, OmnicamRanges
 from mazeslam.geometry import TWO_PI, transform_points
 from mazeslam.limits import beams_problem
 
 #: Angle (rad) by which a wall's angular extent is widened when choosing the beams to test.
 ANGLE_MARGIN = 1e-9
+
+
+class LaserModel(enum.StrEnum):
+    """How true ranges become reported ones."""
+
+    GAUSSIAN = "gaussian"  #: true range plus Gaussian noise of ``range_noise_std``
+    OMNICAM = "omnicam"  #: the course robot's camera: edge noise and whole pixels (``mazeslam.envs.omnicam_sensor``)
 
 
 @dataclass(frozen=True)
@@ -28,10 +37,14 @@ class LaserParams:
 
     Attributes:
         beams: number of beams over the field of view (the exercise's N; default 180, one per 2 deg).
-        max_range: longest range reported, metres; farther walls give 0.
+        max_range: longest range reported, metres; farther walls give 0 (for the camera: the
+            distance its mirror's outer radius sees).
         min_range: shortest range reported, metres; nearer walls give 0 (the camera's blind disc).
+        model: ``"gaussian"`` (range plus ``range_noise_std``) or ``"omnicam"`` (the course robot's
+            camera, ``omnicam``'s settings; ``range_noise_std`` is then unused).
         range_noise_std: standard deviation of the Gaussian range noise, metres.
         dropout: probability that a beam returns nothing (0), independent per beam.
+        omnicam: the camera model's settings (TOML ``[laser.omnicam]``).
         geometry: where the beams point and where the sensor sits on the robot (TOML
             ``[laser.geometry]``; default: the exercise's convention, beam 0 behind, mounted on the
             wheel axle).
@@ -40,8 +53,10 @@ class LaserParams:
     beams: int = 180
     max_range: float = 0.8
     min_range: float = 0.0
+    model: LaserModel = LaserModel.GAUSSIAN
     range_noise_std: float = 0.003
     dropout: float = 0.0
+    omnicam: OmnicamParams = field(default_factory=OmnicamParams)
     geometry: BeamGeometry = field(default_factory=BeamGeometry)
 
     def __post_init__(self):
@@ -54,12 +69,17 @@ class LaserParams:
         )
         require(self.range_noise_std >= 0, f"laser range_noise_std must be >= 0, got {self.range_noise_std}")
         require(0 <= self.dropout < 1, f"laser dropout must be in [0, 1), got {self.dropout}")
+        require(self.model in tuple(LaserModel), f"laser model must be 'gaussian' or 'omnicam', got {self.model!r}")
+        object.__setattr__(self, "model", LaserModel(self.model))
 
     def sensor_mapping(self) -> dict:
         """The map sidecar's ``sensor``: these settings with the geometry's fields beside them
         (flat: ``beams``, ``max_range``, ..., ``first_beam_angle``, ``direction``, ...), as
-        ``mazeslam.sidecars.beam_geometry`` reads them."""
-        settings = {f.name: getattr(self, f.name) for f in fields(self) if f.name != "geometry"}
+        ``mazeslam.sidecars.beam_geometry`` reads them; the camera model's settings as a table
+        ``omnicam`` when that model is used."""
+        settings = {f.name: getattr(self, f.name) for f in fields(self) if f.name not in ("geometry", "omnicam")}
+        if self.model == LaserModel.OMNICAM:
+            settings["omnicam"] = asdict(self.omnicam)
         return {**settings, **self.geometry.to_dict()}
 
 
@@ -141,16 +161,20 @@ class VirtualLaser:
 
     The beam geometry (``params.geometry``) gives each beam's bearing in the robot frame and the
     sensor's mounting point; ``scan`` returns ranges in beam order, as written to a course log.
+    The ``params.model`` turns true ranges into reported ones.
     """
 
     def __init__(self, params: LaserParams, surfaces: np.ndarray):
         self.params = params
         self.bearings = params.geometry.bearings(params.beams)  # (N,) robot frame, radians
         self.mount = (params.geometry.mount_x, params.geometry.mount_y)
-        self.caster = RayCaster(surfaces, self.bearings, params.max_range)
+        self.camera = OmnicamRanges(params.omnicam) if params.model == LaserModel.OMNICAM else None
+        reach = self.camera.farthest_reported(params.max_range) if self.camera else params.max_range
+        self.caster = RayCaster(surfaces, self.bearings, reach)
 
     def true_ranges(self, pose: np.ndarray) -> np.ndarray:
-        """Noise-free ranges (N,) from robot ``pose`` (x, y, theta), ``inf`` beyond ``max_range``."""
+        """Noise-free ranges (N,) from robot ``pose`` (x, y, theta), ``inf`` beyond ``max_range`` (for
+        the camera: beyond the farthest wall its noise can bring within ``max_range``)."""
         sensor_x, sensor_y = transform_points(pose, self.mount)
         return self.caster.cast(float(sensor_x), float(sensor_y), float(pose[2]))
 
@@ -161,7 +185,12 @@ class VirtualLaser:
     def measure(self, ranges: np.ndarray, rng: np.random.Generator) -> np.ndarray:
         """What the sensor reports for the true ranges (N,): noise, dropouts, 0 outside its range."""
         p = self.params
-        noisy = ranges + rng.normal(0.0, p.range_noise_std, size=ranges.shape) if p.range_noise_std else ranges
+        if self.camera is not None:
+            noisy = self.camera.measure(ranges, rng)
+        elif p.range_noise_std:
+            noisy = ranges + rng.normal(0.0, p.range_noise_std, size=ranges.shape)
+        else:
+            noisy = ranges
         dropped = rng.random(ranges.shape) < p.dropout if p.dropout else np.zeros(ranges.shape, dtype=bool)
         valid = np.isfinite(ranges) & (noisy >= p.min_range) & (noisy <= p.max_range) & ~dropped
         return np.where(valid, noisy, 0.0)

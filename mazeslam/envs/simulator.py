@@ -6,6 +6,10 @@ writes an odometry record every ``1 / odometry_rate`` s (F_O_U) and a scan every
 odometry record with the same timestamp precedes each scan: the scan is taken exactly at the pose
 the odometry up to it describes (a logger that scans between encoder reads makes the filter place
 the scan at a pose up to 1/F_O_U seconds old).
+
+With ``odometry.glitch_rate`` above 0 some odometry records are glitches (``OdometryGlitches``); the
+map sidecar then lists them as ``odometry_glitches``: ``[record index, kind]`` pairs, the index
+counting the log's records from 0 (as the truth sidecar's rows).
 """
 
 from __future__ import annotations
@@ -20,7 +24,7 @@ from mazeslam import sidecars
 from mazeslam.config import load_toml, require, to_mapping
 from mazeslam.envs.laser import LaserParams, VirtualLaser
 from mazeslam.envs.maze import Maze, generate_maze, load_maze
-from mazeslam.envs.odometry import OdometryParams, WheelEncoders
+from mazeslam.envs.odometry import OdometryGlitches, OdometryParams, WheelEncoders
 from mazeslam.envs.policies import DriveParams, ExplorerPolicy
 from mazeslam.envs.walls import wall_geometry
 from mazeslam.envs.world import RobotParams, World
@@ -150,12 +154,15 @@ def simulate(
         require(duration > 0, f"duration must be positive, got {duration}")
         too_long = duration_problem(duration)
         require(too_long is None, f"duration: {too_long}")
-    maze_rng, drive_rng, slip_rng, laser_rng = (np.random.default_rng(s) for s in np.random.SeedSequence(seed).spawn(4))
+    maze_rng, drive_rng, slip_rng, laser_rng, glitch_rng = (
+        np.random.default_rng(s) for s in np.random.SeedSequence(seed).spawn(5)
+    )
     maze = _resolve_maze(maze, config.maze, maze_rng, seed)
     walls = wall_geometry(maze)
     start_pose = np.array([*maze.cell_center(*maze.start_cell), 0.0])
     world = World(walls.boxes, config.robot, start_pose)
     encoders = WheelEncoders(config.robot, config.odometry, slip_rng)
+    glitches = OdometryGlitches(config.odometry, glitch_rng)
     laser = VirtualLaser(config.laser, walls.surfaces)
     policy = policy or ExplorerPolicy(maze, config.drive, drive_rng)
 
@@ -167,6 +174,7 @@ def simulate(
     steps_per_scan = logger.scan_period / dt
     record_times: list[float] = []
     record_poses: list[np.ndarray] = []
+    glitched: list[tuple[int, str]] = []  # (record index, kind) of the odometry glitches written
     bar = tqdm(
         total=round(end_time if duration is not None else 0) or None,
         unit="sim s",
@@ -186,7 +194,10 @@ def simulate(
             if scan_due or step >= next_odometry - 1e-6:
                 if step >= next_odometry - 1e-6:
                     next_odometry += steps_per_odometry
-                writer.write_odometry(t, *encoders.read())
+                distance, turn, glitch = glitches.apply(*encoders.read())
+                if glitch:
+                    glitched.append((len(record_times), glitch))
+                writer.write_odometry(t, distance, turn)
                 record_times.append(t)
                 record_poses.append(world.pose)
             if scan_due:
@@ -220,6 +231,7 @@ def simulate(
             "text": maze.to_text(),
         },
         parameters=to_mapping(config),
+        **({"odometry_glitches": glitched} if config.odometry.glitch_rate else {}),
     )
     return SimulationResult(out, truth_file, map_file, times, poses, maze, bool(getattr(policy, "done", True)))
 
