@@ -90,7 +90,8 @@ def test_mounting_offset_moves_the_sensor_ahead_of_the_axle():
 
 
 @pytest.mark.parametrize(
-    "kwargs", [{"beams": 0}, {"max_range": 0}, {"min_range": 1.0}, {"range_noise_std": -1}, {"dropout": 1.0}]
+    "kwargs",
+    [{"beams": 0}, {"max_range": 0}, {"min_range": 1.0}, {"range_noise_std": -1}, {"dropout": 1.0}, {"model": "sonar"}],
 )
 def test_impossible_laser_parameters_are_rejected(kwargs):
     with pytest.raises(ValueError):

@@ -94,6 +94,25 @@ def test_noise_free_odometry_dead_reckons_the_truth(tmp_path):
     assert np.abs(estimate[:, :2] - result.poses[:, :2]).max() < 3e-3
 
 
+def test_odometry_glitches_change_only_the_listed_records_and_leave_the_truth(tmp_path):
+    glitchy = dataclasses.replace(SimulationConfig(), odometry=OdometryParams(glitch_rate=0.05))
+    clean = simulate(tmp_path / "clean.log", seed=4, duration=60, progress=False)
+    result = simulate(tmp_path / "glitchy.log", config=glitchy, seed=4, duration=60, progress=False)
+    assert result.truth_path.read_bytes() == clean.truth_path.read_bytes()
+    clean_log, course_log = log.read(clean.log_path), log.read(result.log_path)
+    np.testing.assert_array_equal(course_log.scans, clean_log.scans)
+    glitches = sidecars.read_map(result.map_path)["odometry_glitches"]
+    changed = np.flatnonzero(np.any(course_log.values[:, :2] != clean_log.values[:, :2], axis=1))
+    assert len(glitches) > 3 and changed.tolist() == [index for index, _ in glitches]
+    difference = course_log.values[:, :2] - clean_log.values[:, :2]  # (dX, dTheta) each glitch added
+    for (index, kind), following in zip(glitches, [*glitches[1:], None]):
+        if kind == "pair_first":  # taken back at the next odometry record (a scan may lie between)
+            assert following[1] == "pair_second"
+            np.testing.assert_allclose(difference[index] + difference[following[0]], 0.0, atol=2e-6)
+        elif kind == "lone":
+            np.testing.assert_allclose(difference[index], [-2 * glitchy.odometry.glitch_distance, 0.0], atol=2e-6)
+
+
 def test_explorer_visits_every_cell_and_returns(default_run):
     maze = default_run.maze
     visited = {maze.cell_of(x, y) for x, y, _ in default_run.poses}

@@ -168,7 +168,7 @@ class VirtualLaser:
         self.params = params
         self.bearings = params.geometry.bearings(params.beams)  # (N,) robot frame, radians
         self.mount = (params.geometry.mount_x, params.geometry.mount_y)
-        self.camera = OmnicamRanges(params.omnicam) if params.model == LaserModel.OMNICAM else None
+        self.camera = OmnicamRanges(params.omnicam, self.bearings) if params.model == LaserModel.OMNICAM else None
         reach = self.camera.farthest_reported(params.max_range) if self.camera else params.max_range
         self.caster = RayCaster(surfaces, self.bearings, reach)
 

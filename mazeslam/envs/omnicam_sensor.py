@@ -7,7 +7,8 @@ is read back from the first dark pixel outward, so what the sensor reports is
     rho' = whole pixel containing (rho + edge noise), taken at its centre
     d'   = h tan(rho' / alpha)
 
-with Gaussian edge noise in pixels (blur, lighting, a wall's uneven edge). A pixel covers
+with Gaussian edge noise in pixels (blur, lighting, a wall's uneven edge); beams in sectors the
+mirror's supports hide report nothing. A pixel covers
 dd/drho = h / alpha sec^2(rho / alpha) metres of floor, which grows with distance: about 2 mm at
 0.1 m, 4 mm at 0.2 m and 8 mm at 0.3 m for the exercise's mirror (h 0.126 m, alpha 107 px/rad), so
 the range error grows with distance as the real sensor's does. The mirror's constants are those of
@@ -30,29 +31,42 @@ class OmnicamParams:
     """The camera's range-model settings (TOML ``[laser.omnicam]``), used when ``[laser] model = "omnicam"``.
 
     Attributes:
-        edge_noise_px: standard deviation of the wall edge's pixel radius, pixels (Gaussian).
+        edge_noise_px: standard deviation of the wall edge's pixel radius, pixels (Gaussian,
+            independent per beam and scan). Default: log1's, measured on its first 8 scans, taken
+            standing still (their whole-pixel ranges vary by 0.20 px^2 per beam, as a 0.35 px
+            Gaussian's do after rounding to whole pixels).
         pixel_step: radial sampling of the image, pixels: the edge is found to the whole pixel
             (1.0); 0 reports the noisy radius unquantised.
+        occluded: bearing sectors ``[from, to]`` (degrees, robot frame, counter-clockwise from
+            forward, inclusive, 0-360) in which the camera never sees the floor (the mirror's
+            supports, cables): their beams always report 0.
     """
 
-    edge_noise_px: float = 0.5
+    edge_noise_px: float = 0.35
     pixel_step: float = 1.0
+    occluded: tuple[tuple[float, float], ...] = ()
 
     def __post_init__(self):
         require(
             0 <= self.edge_noise_px <= 100, f"omnicam edge_noise_px must be in [0, 100] px, got {self.edge_noise_px}"
         )
         require(0 <= self.pixel_step <= 100, f"omnicam pixel_step must be in [0, 100] px, got {self.pixel_step}")
+        require(
+            all(0 <= low <= 360 and 0 <= high <= 360 for low, high in self.occluded),
+            f"omnicam occluded sectors must be [from, to] pairs of degrees in 0-360, got {self.occluded!r}",
+        )
+        object.__setattr__(self, "occluded", tuple((float(low), float(high)) for low, high in self.occluded))
 
 
 class OmnicamRanges:
     """True floor distances turned into the ranges the camera reports (before the laser's range limits).
 
     Args:
-        params: the noise and sampling settings.
+        params: the noise, sampling and occlusion settings.
+        bearings: (N,) the beams' bearings in the robot frame, radians.
     """
 
-    def __init__(self, params: OmnicamParams):
+    def __init__(self, params: OmnicamParams, bearings: np.ndarray):
         # Imported here, not at the top: the mirror model's module loads OpenCV (about 0.2 s), which
         # only a simulation with this sensor needs.
         from mazeslam.robot.omnicam import CameraCalibration
@@ -61,6 +75,7 @@ class OmnicamRanges:
         #: The exercise's mirror (default height and alpha); the ring's centre and radii are unused here.
         self.mirror = CameraCalibration(center_x=0.0, center_y=0.0, inner_radius=0.0, outer_radius=1.0)
         self.horizon = self.mirror.alpha * math.pi / 2  # pixel radius of the horizon (d = infinity)
+        self.occluded = occluded_beams(np.asarray(bearings, dtype=float), params.occluded)  # (N,) bool
 
     def farthest_reported(self, max_range: float) -> float:
         """The farthest true range (m) whose edge noise (up to 6 sigma) and pixel can bring it
@@ -70,8 +85,9 @@ class OmnicamRanges:
         return float(self.mirror.distance(np.asarray(rho))) if rho < self.horizon else math.inf
 
     def measure(self, ranges: np.ndarray, rng: np.random.Generator) -> np.ndarray:
-        """Reported ranges (N,) in metres for true floor distances ``ranges`` (N,) in metres: ``inf``
-        where the true range is ``inf`` (no wall) or the noisy edge lies at or beyond the horizon."""
+        """Reported ranges (N,) in metres for the beams' true floor distances ``ranges`` (N,) in
+        metres: ``inf`` where the true range is ``inf`` (no wall), the beam is occluded or the
+        noisy edge lies at or beyond the horizon."""
         p = self.params
         ranges = np.asarray(ranges, dtype=float)
         rho = self.mirror.radius(np.where(np.isfinite(ranges), ranges, 0.0))
@@ -79,5 +95,17 @@ class OmnicamRanges:
             rho = rho + rng.normal(0.0, p.edge_noise_px, size=rho.shape)
         if p.pixel_step:
             rho = (np.floor(rho / p.pixel_step) + 0.5) * p.pixel_step
-        seen = np.isfinite(ranges) & (rho >= 0) & (rho < self.horizon)
+        seen = np.isfinite(ranges) & ~self.occluded & (rho >= 0) & (rho < self.horizon)
         return np.where(seen, self.mirror.distance(np.where(seen, rho, 0.0)), np.inf)
+
+
+def occluded_beams(bearings: np.ndarray, sectors) -> np.ndarray:
+    """(N,) True for the beams whose bearing (N,) radians lies in one of ``sectors``: ``[from, to]``
+    degrees, 0-360 counter-clockwise, inclusive; a sector with from > to wraps through 0."""
+    degrees = np.mod(np.degrees(bearings), 360.0)
+    tolerance = 1e-6  # a beam exactly on a sector's edge counts as inside
+    occluded = np.zeros(len(degrees), dtype=bool)
+    for low, high in sectors:
+        above, below = degrees >= low - tolerance, degrees <= high + tolerance
+        occluded |= (above & below) if low <= high else (above | below)
+    return occluded
