@@ -258,6 +258,19 @@ def _geometry_overrides(first_beam_angle, beam_direction, mount_x):
     type=click.Choice(["corners", "endpoints"]),
     help="corners: fixed landmarks only; endpoints: every segment end (the exercise).",
 )
+@click.option(
+    "--live",
+    is_flag=True,
+    help="Show each scan as it is processed in a window (points, lines, corners, the robot); without a "
+    "display, says so (use --plot or --animate).",
+)
+@click.option(
+    "--max-fps",
+    type=click.FloatRange(min=0.1),
+    default=5.0,
+    show_default=True,
+    help="With --live: at most this many frames a second.",
+)
 @beam_geometry_options
 def corners(
     log_file,
@@ -267,6 +280,8 @@ def corners(
     json_path,
     config_path,
     mode,
+    live,
+    max_fps,
     first_beam_angle,
     beam_direction,
     mount_x,
@@ -277,9 +292,22 @@ def corners(
     for written in (plot_path, animation_path, json_path):
         if written:
             prepare_output_file(written)
-    report = CornerReport.from_log(
-        log_file, config_path, mode, _geometry_overrides(first_beam_angle, beam_direction, mount_x)
-    )
+    sensor = _geometry_overrides(first_beam_angle, beam_direction, mount_x)
+    view = None
+    if live:
+        from mazeslam.live import CornersLiveView
+        from mazeslam.scans import load_scans
+
+        view = CornersLiveView(load_scans(log_file, sensor), max_fps=max_fps)
+        if view.message:
+            click.echo(view.message, err=True)
+    report = CornerReport.from_log(log_file, config_path, mode, sensor, on_scan=view)
+    if view is not None:
+        view.close(report)
+        click.echo(
+            f"Live view: {view.frames} frames drawn in {view.drawing_seconds:.1f} s"
+            + ("" if view.window else " (off-screen: no display)")
+        )
     click.echo(report.summary())
     warning = report.convention_warning()
     if warning:

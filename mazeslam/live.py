@@ -1,10 +1,14 @@
-"""``mazeslam slam --live``: the exercise's window, updated as the filter runs.
+"""``mazeslam slam --live`` and ``mazeslam corners --live``: windows updated as the log is processed.
 
 The window is ``SlamView`` (map of the best particle with 2-sigma ellipses, particles, the current
 scan and its corners, the estimated path, truth and walls when the log has them). It is redrawn
 after an observation update at most ``max_fps`` times a second, and never sooner than the last
 redraw took, so drawing takes at most about half of the wall-clock time: the filter runs at least
 half as fast as without the window.
+
+``CornersLiveView`` is the same for ``mazeslam corners``: the current scan in the robot frame, its
+extracted lines and corners, and the robot (a triangle along its heading, +x), redrawn as scans are
+extracted, at most ``max_fps`` times a second and never sooner than the last redraw took.
 
 A window needs a display and an interactive matplotlib backend (Qt, Tk, GTK, macOS). Without one
 (``MPLBACKEND=Agg``, a server without ``DISPLAY``) the view draws into an off-screen figure and
@@ -66,10 +70,7 @@ class LiveView:
         self.message = (
             None
             if self.window
-            else (
-                f"--live: no display for a window (matplotlib backend {backend}); drawing off-screen only. "
-                "Use --animate to write the run as slam.mp4/slam.gif instead."
-            )
+            else no_window_message(backend, "Use --animate to write the run as slam.mp4/slam.gif instead.")
         )
         if self.window:
             plt.ion()
@@ -131,4 +132,77 @@ class LiveView:
             if self.window:
                 plt.pause(1.0)
         plt.close(self.view.figure)
+        plt.switch_backend("Agg")
+
+
+def no_window_message(backend: str, instead: str) -> str:
+    """What to tell the user when ``--live`` has no window, and which non-live output to use."""
+    return f"--live: no display for a window (matplotlib backend {backend}); drawing off-screen only. {instead}"
+
+
+class CornersLiveView:
+    """``on_scan`` for ``CornerReport.from_log``: the current scan, its lines and corners in a window
+    (or off-screen), redrawn at most ``max_fps`` times a second.
+
+    Attributes:
+        frames: how many frames were drawn; window: whether they went to a window on screen;
+        message: what to tell the user when there is no window (None when there is).
+    """
+
+    def __init__(self, scans, max_range: float = np.inf, max_fps: float = 5.0):
+        import matplotlib.pyplot as plt
+
+        from mazeslam.evaluation.corner_plots import ScanView
+
+        self.window, backend = choose_backend()
+        self.message = (
+            None
+            if self.window
+            else no_window_message(
+                backend, "Use --plot scan.png (one scan) or --animate scans.gif (every scan) to write them to files."
+            )
+        )
+        if self.window:
+            plt.ion()
+        self.max_fps = max_fps
+        ranges = np.asarray(scans.ranges, dtype=float)
+        seen = ranges[(ranges > 0) & np.isfinite(ranges) & (ranges <= max_range)]
+        mount = np.array([scans.geometry.mount_x, scans.geometry.mount_y])
+        reach = 1.05 * (float(seen.max()) if len(seen) else 1.0) + float(np.hypot(*mount))
+        self.figure, ax = plt.subplots(figsize=(7, 7.5), layout="constrained")
+        self.view = ScanView(ax, mount, reach=reach, truth=scans.true_corners is not None)
+        handles, labels = ax.get_legend_handles_labels()
+        self.figure.legend(handles, labels, loc="outside lower center", ncol=4, fontsize=7)
+        self.frames, self.drawing_seconds = 0, 0.0
+        self._last, self._last_cost = -np.inf, 0.0
+
+    def __call__(self, report, index: int) -> None:
+        now = time.perf_counter()
+        if now - self._last < max(1.0 / self.max_fps, self._last_cost):
+            return
+        self.draw(report, index)
+        self._last = time.perf_counter()
+        self._last_cost = self._last - now
+        self.drawing_seconds += self._last_cost
+
+    def draw(self, report, index: int) -> None:
+        """Draw scan ``index`` of ``report`` (a ``CornerReport`` being filled)."""
+        import matplotlib.pyplot as plt
+
+        self.view.show(report.features[index], report.title(index), report.true_corners(index))
+        if self.window:
+            plt.pause(0.001)
+        else:
+            self.figure.canvas.draw()
+        self.frames += 1
+
+    def close(self, report=None) -> None:
+        """Draw the last scan (when given), then close the window and return to drawing files."""
+        import matplotlib.pyplot as plt
+
+        if report is not None and report.features:
+            self.draw(report, len(report.features) - 1)
+            if self.window:
+                plt.pause(1.0)
+        plt.close(self.figure)
         plt.switch_backend("Agg")

@@ -57,3 +57,36 @@ def test_slam_live_without_a_display_says_so(short_log, tmp_path, monkeypatch):
     assert "no display" in result.output and "--animate" in result.output
     assert "Live view:" in result.output
     assert (tmp_path / "out" / "slam.png").stat().st_size > 10_000  # the figures still go to files
+
+
+def test_corners_live_without_a_display_says_so(short_log, monkeypatch):
+    monkeypatch.setenv("MPLBACKEND", "Agg")
+    result = CliRunner().invoke(main, ["corners", str(short_log), "--live", "--max-fps", "1000"])
+    assert result.exit_code == 0, result.output
+    assert "no display" in result.output and "--plot" in result.output and "--animate" in result.output
+    assert "Live view:" in result.output and "scans of" in result.output
+
+
+def test_corners_live_view_draws_the_current_scan_at_a_bounded_rate(short_log, monkeypatch):
+    monkeypatch.setenv("MPLBACKEND", "Agg")
+    from mazeslam.evaluation.corner_report import CornerReport
+    from mazeslam.live import CornersLiveView
+    from mazeslam.scans import load_scans
+
+    view = CornersLiveView(load_scans(short_log), max_fps=1000.0)
+    assert not view.window
+    report = CornerReport.from_log(short_log, progress=False, on_scan=view)
+    assert 1 <= view.frames <= len(report.features)
+    last = report.features[-1]
+    view.close(report)
+    # The last frame is the last scan: its points, one line per segment, the robot pointing along +x.
+    assert len(view.view.points.get_xdata()) == len(last.points)
+    assert len(view.view.lines.get_segments()) == len(last.segments)
+    assert view.view.ax.get_xlabel() == "x forward [m]"
+    assert "scan" in view.view.ax.get_title()
+
+    slow = CornersLiveView(load_scans(short_log), max_fps=2.0)
+    began = time.perf_counter()
+    CornerReport.from_log(short_log, progress=False, on_scan=slow)
+    assert slow.frames <= 2.0 * (time.perf_counter() - began) + 1
+    slow.close()

@@ -5,6 +5,7 @@ from __future__ import annotations
 import dataclasses
 import json
 from collections import Counter
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -19,7 +20,7 @@ from tqdm.auto import tqdm  # noqa: E402
 from mazeslam.beam_detection import convention_warning  # noqa: E402
 from mazeslam.beams import SensorOverrides  # noqa: E402
 from mazeslam.config import jsonable, load_toml, with_changes  # noqa: E402
-from mazeslam.evaluation.corner_plots import draw_scan, plot_scan  # noqa: E402
+from mazeslam.evaluation.corner_plots import ScanView, plot_scan  # noqa: E402
 from mazeslam.filters.corners import CornerExtractor, CornerParams, ScanFeatures  # noqa: E402
 from mazeslam.geometry import inverse, transform_points  # noqa: E402
 from mazeslam.scans import ScanSet, load_scans  # noqa: E402
@@ -41,15 +42,19 @@ class CornerReport:
         mode: str | None = None,
         sensor: SensorOverrides | None = None,
         progress: bool = True,
+        on_scan: Callable[[CornerReport, int], None] | None = None,
     ) -> CornerReport:
+        """Extract every scan of the log at ``path``; ``on_scan(report so far, scan index)`` is
+        called after each scan (``mazeslam corners --live`` draws it)."""
         params = with_changes(load_toml(CornerParams, config_path) if config_path else CornerParams(), mode=mode)
         scans = load_scans(path, sensor)
         extractor = CornerExtractor(scans.geometry, scans.n_beams, params)
-        features = [
-            extractor.extract(ranges)
-            for ranges in tqdm(scans.ranges, desc="corners", unit="scan", disable=not progress)
-        ]
-        return cls(scans, params, features)
+        report = cls(scans, params, [])
+        for index, ranges in enumerate(tqdm(scans.ranges, desc="corners", unit="scan", disable=not progress)):
+            report.features.append(extractor.extract(ranges))
+            if on_scan is not None:
+                on_scan(report, index)
+        return report
 
     def summary(self) -> str:
         kinds = Counter(o.kind for f in self.features for o in f.observations)
@@ -76,21 +81,29 @@ class CornerReport:
             return None
         return convention_warning(run.log, self.scans.geometry, self.params.min_range, self.params.max_range)
 
-    def _title(self, index: int) -> str:
+    def title(self, index: int) -> str:
+        """What a figure of scan ``index`` shows."""
         return (
             f"{Path(self.scans.source).name}: scan {index} (record {self.scans.records[index]}, "
-            f"t = {self.scans.times[index]:.2f} s)"
+            f"t = {self.scans.times[index]:.2f} s), lines and corners in the robot frame"
         )
+
+    @property
+    def mount(self) -> tuple[float, float]:
+        return (self.scans.geometry.mount_x, self.scans.geometry.mount_y)
+
+    def reach(self) -> float:
+        """Half-width of a view that holds every scan's points (metres)."""
+        return 1.05 * max((float(abs(f.points).max()) for f in self.features if len(f.points)), default=1.0)
 
     def plot(self, index: int, path) -> Path:
         if index >= len(self.features):
             raise ValueError(
                 f"scan {index} does not exist: the log has {len(self.features)} scans (0..{len(self.features) - 1})"
             )
-        mount = (self.scans.geometry.mount_x, self.scans.geometry.mount_y)
-        return plot_scan(path, self.features[index], mount, self._title(index), self._true_corners(index))
+        return plot_scan(path, self.features[index], self.mount, self.title(index), self.true_corners(index))
 
-    def _true_corners(self, index: int):
+    def true_corners(self, index: int):
         """The world's true corners in the robot frame at scan ``index``, when the log has truth."""
         if self.scans.true_poses is None or self.scans.true_corners is None:
             return None
@@ -100,18 +113,15 @@ class CornerReport:
         """The scans in turn (every scan, or evenly spaced ones up to ``most_frames``), in one GIF,
         with fixed axes so the view does not jump."""
         frames = np.unique(np.linspace(0, len(self.features) - 1, min(len(self.features), most_frames)).astype(int))
-        mount = (self.scans.geometry.mount_x, self.scans.geometry.mount_y)
-        fig, ax = plt.subplots(figsize=(6, 6))
-        reach = 1.05 * max((float(abs(f.points).max()) for f in self.features if len(f.points)), default=1.0)
+        fig, ax = plt.subplots(figsize=(7, 7.5), layout="constrained")
+        view = ScanView(ax, self.mount, reach=self.reach(), truth=self.scans.true_corners is not None)
+        handles, labels = ax.get_legend_handles_labels()
+        fig.legend(handles, labels, loc="outside lower center", ncol=4, fontsize=7)
 
         def draw(index):
-            ax.clear()
-            draw_scan(ax, self.features[index], mount)
-            ax.set_xlim(-reach, reach)
-            ax.set_ylim(-reach, reach)
-            ax.set_title(self._title(index), fontsize=9)
+            view.show(self.features[index], self.title(index), self.true_corners(index))
 
-        animation = FuncAnimation(fig, draw, frames=frames)
+        animation = FuncAnimation(fig, draw, frames=frames, cache_frame_data=False)
         path = Path(path)
         path.parent.mkdir(parents=True, exist_ok=True)
         animation.save(path, writer=PillowWriter(fps=frames_per_second))

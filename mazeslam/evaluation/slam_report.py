@@ -15,7 +15,7 @@ from matplotlib.patches import Ellipse  # noqa: E402
 from mazeslam import log, sidecars  # noqa: E402
 from mazeslam.beams import BeamGeometry  # noqa: E402
 from mazeslam.config import jsonable  # noqa: E402
-from mazeslam.evaluation.plots import save_figure  # noqa: E402
+from mazeslam.evaluation.plots import draw_ellipses, draw_walls, save_figure  # noqa: E402
 from mazeslam.evaluation.slam_view import ScanSource, SlamView, save_animation, view_extent  # noqa: E402
 from mazeslam.geometry import transform_points  # noqa: E402
 from mazeslam.slam import SlamResult  # noqa: E402
@@ -73,11 +73,9 @@ def plot_slam(
     points in black, the estimated path; with truth, the true path (``truth_label``: a reference
     path is not truth), walls and landmarks too."""
     fig, ax = plt.subplots(figsize=(9, 7))
-    if walls is not None:
-        for x1, y1, x2, y2 in walls:
-            ax.plot([x1, x2], [y1, y2], color="0.6", linewidth=1.0)
-    if len(points):
-        ax.plot(points[:, 0], points[:, 1], ".", color="black", markersize=0.8, alpha=0.4, label="scan points")
+    draw_walls(ax, walls)
+    if len(points):  # one rasterised artist: thousands of points cost one image, not thousands of marks
+        ax.plot(*points.T, ".", color="black", markersize=0.8, alpha=0.4, label="scan points", rasterized=True)
     if truth is not None:
         ax.plot(truth[:, 0], truth[:, 1], color="tab:green", linewidth=1.2, label=truth_label)
     if true_landmarks is not None and len(true_landmarks):
@@ -93,8 +91,7 @@ def plot_slam(
     ax.plot(result.mean_poses[:, 0], result.mean_poses[:, 1], color="tab:blue", linewidth=1.2, label="FastSLAM path")
     particles = result.filter.poses
     ax.plot(particles[:, 0], particles[:, 1], ".", color="red", markersize=3, label="particles")
-    for mean, covariance in zip(result.landmarks, result.landmark_covariances):
-        ax.add_patch(_ellipse(mean, covariance))
+    draw_ellipses(ax, result.landmarks, result.landmark_covariances)
     if len(result.landmarks):
         ax.plot(
             result.landmarks[:, 0],

@@ -13,6 +13,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 import pandas as pd  # noqa: E402
 
+from mazeslam.evaluation.plots import draw_walls  # noqa: E402
 from mazeslam.evaluation.sweep import MAPS, summarise  # noqa: E402
 
 #: The summary's columns: (metric, header). Metrics an older table lacks are left out.
@@ -61,9 +62,58 @@ SETTING_LABELS = {
 }
 
 
+#: Units of the first setting of linked settings, whose axis is labelled by that one.
+LINKED_UNITS = {"sigmaX": "m/sqrt(m)", "sigmaR": "m"}
+
+
 def short_name(key: str) -> str:
     """A grid key without its place: ``slam.fastslam.sigmaR+slam.fastslam.sigmaB`` -> ``sigmaR+sigmaB``."""
     return "+".join(part.split(".")[-1] for part in key.split("+"))
+
+
+def linked_values(values: list) -> np.ndarray | None:
+    """(N, K) numbers of a linked setting's N grid values ``"a/b/c"`` (None when they are not all numbers)."""
+    try:
+        return np.array([[float(part) for part in str(v).split("/")] for v in values])
+    except ValueError:
+        return None
+
+
+def tick_labels(values: list) -> list[str]:
+    """Short tick labels: a linked setting (``"a/b/c"``, several settings scaled together) by its first
+    number alone (``axis_label`` says how the others follow), anything else as it is."""
+    numbers = linked_values(values)
+    if numbers is None or numbers.shape[1] < 2:
+        return [str(v) for v in values]
+    return [f"{n:.2g}" for n in numbers[:, 0]]
+
+
+def axis_label(key: str, values: list) -> str:
+    """The x axis label of a grid setting, with units; for settings scaled together, the first one's
+    name and how the others follow it (their ratio to it, when it is the same on every tick)."""
+    name = short_name(key)
+    label = SETTING_LABELS.get(name, name)
+    numbers = linked_values(values)
+    if numbers is None or numbers.shape[1] < 2 or "+" not in name:
+        return label
+    names = name.split("+")
+    ratios = numbers[:, 1:] / numbers[:, :1]
+    spread = ratios.max(axis=0) / ratios.min(axis=0) - 1
+    follows = ", ".join(
+        f"{other} {'=' if s < 0.001 else '≈'} {r:.3g} x" if s < 0.05 else f"{other} scaled with it"
+        for other, r, s in zip(names[1:], np.median(ratios, axis=0), spread)
+    )
+    unit = LINKED_UNITS.get(names[0], "")
+    return f"assumed {names[0]}{f' [{unit}]' if unit else ''}\n({follows})"
+
+
+def setting_text(key: str, value) -> str:
+    """``name=value`` of a grid cell, short: settings scaled together by the first one's value."""
+    names = short_name(key).split("+")
+    numbers = linked_values([value])
+    if len(names) > 1 and numbers is not None:
+        return f"{names[0]}={numbers[0, 0]:.2g} (and {', '.join(names[1:])} with it)"
+    return f"{short_name(key)}={value}"
 
 
 def make_report(out_dir: str | Path) -> list[Path]:
@@ -76,7 +126,7 @@ def make_report(out_dir: str | Path) -> list[Path]:
     written[0].write_text(summary_table(table, keys))
     for key in keys:
         written.append(_plot_against(table, key, [k for k in keys if k != key], out_dir, meta.get("name", "")))
-    maps = _maps_side_by_side(table, keys, out_dir)
+    maps = _maps_side_by_side(table, keys, out_dir, name=meta.get("name", ""))
     if maps is not None:
         written.append(maps)
     return written
@@ -121,7 +171,9 @@ def _plot_against(table: pd.DataFrame, key: str, others: list[str], out_dir: Pat
     summary = summarise(table, [key] + others, [spec[0] for spec in plotted] + ["reckoning_ate_rmse"])
     columns = 4
     rows = math.ceil(len(plotted) / columns)
-    fig, grid = plt.subplots(rows, columns, figsize=(4.3 * columns, 3.5 * rows + 1.0), squeeze=False)
+    fig, grid = plt.subplots(
+        rows, columns, figsize=(4.3 * columns, 3.6 * rows + 1.2), squeeze=False, layout="constrained"
+    )
     axes = list(grid.flat)
     for ax in axes[len(plotted) :]:
         ax.axis("off")
@@ -130,7 +182,8 @@ def _plot_against(table: pd.DataFrame, key: str, others: list[str], out_dir: Pat
     values = sorted(summary[key].unique()) if numeric else list(dict.fromkeys(table[key].astype(str)))
     positions = {value: k for k, value in enumerate(values)}
     categorical = not numeric or any(isinstance(v, str) for v in values)
-    unordered = categorical and not any("/" in str(v) for v in values)  # linked settings keep the grid's order
+    linked = categorical and any("/" in str(v) for v in values)
+    unordered = categorical and not linked  # linked settings keep the grid's order
     for index, (label, group) in enumerate(groups):
         group = (
             group.sort_values(key)
@@ -186,13 +239,13 @@ def _plot_against(table: pd.DataFrame, key: str, others: list[str], out_dir: Pat
             ax.annotate(text, (0.01, value), xycoords=("axes fraction", "data"), fontsize=7, color="0.3", va="bottom")
         ax.set_ylabel(title, fontsize=9)
         ax.set_title(title.replace(" (log)", ""), fontsize=10)
-        ax.set_xlabel(SETTING_LABELS.get(short_name(key), short_name(key)), fontsize=7)
+        ax.set_xlabel(axis_label(key, values), fontsize=8)
         if log:
             ax.set_yscale("log")
         elif not metric.startswith("optimum"):
             ax.set_ylim(bottom=0)
         if categorical:
-            ax.set_xticks(range(len(values)), [str(v).replace("/", "/\n") for v in values], fontsize=7)
+            ax.set_xticks(range(len(values)), tick_labels(values), fontsize=8, rotation=30 if linked else 0)
             ax.set_xlim(-0.5, len(values) - 0.5)
         elif summary[key].min() > 0 and summary[key].max() / summary[key].min() >= 20:
             ax.set_xscale("log")
@@ -210,18 +263,19 @@ def _plot_against(table: pd.DataFrame, key: str, others: list[str], out_dir: Pat
     seeds = table.seed.nunique()
     fig.suptitle(
         f"{name or out_dir.name}: FastSLAM against {short_name(key)}, {seeds} seeds "
-        f"(mean and 95 % CI; NEES: median over seeds and quartiles)",
+        f"(mean over seeds, bars: 95 % CI clipped at 0; NEES: median and quartiles)",
         fontsize=11,
     )
-    fig.legend(handles, labels, loc="lower center", ncol=min(len(labels), 5), fontsize=8)
-    fig.tight_layout(rect=(0, 0.06, 1, 0.96))
+    fig.legend(handles, labels, loc="outside lower center", ncol=min(len(labels), 5), fontsize=8)
     path = out_dir / f"plot_{short_name(key)}.png"
     fig.savefig(path, dpi=100)
     plt.close(fig)
     return path
 
 
-def _maps_side_by_side(table: pd.DataFrame, keys: list[str], out_dir: Path, limit: int = 8) -> Path | None:
+def _maps_side_by_side(
+    table: pd.DataFrame, keys: list[str], out_dir: Path, limit: int = 8, name: str = ""
+) -> Path | None:
     """The first seed's final map (aligned) of each grid cell, up to ``limit`` cells."""
     first = table[table.seed == table.seed.min()].drop_duplicates(subset=keys)[:limit]
     files = [out_dir / MAPS / f"{run}.json" for run in first.run_id]
@@ -229,28 +283,44 @@ def _maps_side_by_side(table: pd.DataFrame, keys: list[str], out_dir: Path, limi
         return None
     columns = min(len(files), 4)
     rows = math.ceil(len(files) / columns)
-    fig, axes = plt.subplots(rows, columns, figsize=(3.6 * columns, 3.6 * rows + 0.6), squeeze=False)
+    fig, axes = plt.subplots(
+        rows,
+        columns,
+        figsize=(3.6 * columns, 3.6 * rows + 0.9),
+        squeeze=False,
+        layout="constrained",
+    )
     for ax, file, (_, row) in zip(axes.flat, files, first.iterrows()):
         drawing = json.loads(file.read_text())
-        for x1, y1, x2, y2 in drawing["walls"]:
-            ax.plot([x1, x2], [y1, y2], color="0.6", linewidth=0.8)
-        truth = pd.DataFrame(drawing["truth"])
-        ax.plot(truth[0], truth[1], color="tab:green", linewidth=0.8, label="true path")
-        path = pd.DataFrame(drawing["trajectory"])
-        ax.plot(path[0], path[1], color="tab:blue", linewidth=0.8, label="FastSLAM mean path (aligned)")
+        draw_walls(ax, np.asarray(drawing["walls"], float), linewidth=0.8)
+        truth = np.asarray(drawing["truth"], float)
+        ax.plot(truth[:, 0], truth[:, 1], color="tab:green", linewidth=0.8, label="true path")
+        mean_path = np.asarray(drawing["trajectory"], float)
+        ax.plot(mean_path[:, 0], mean_path[:, 1], color="tab:blue", linewidth=0.8, label="FastSLAM mean path (aligned)")
         if drawing["landmarks"]:
-            marks = pd.DataFrame(drawing["landmarks"])
-            ax.plot(marks[0], marks[1], "+", color="tab:purple", markersize=6, label="landmarks (aligned)")
+            marks = np.asarray(drawing["landmarks"], float)
+            ax.plot(marks[:, 0], marks[:, 1], "+", color="tab:purple", markersize=6, label="landmarks (aligned)")
         ax.set_aspect("equal")
-        ax.set_xticks([])
-        ax.set_yticks([])
-        ax.set_title(", ".join(f"{short_name(k)}={row[k]}" for k in keys) + f"\nATE {row.ate_rmse:.3f} m", fontsize=8)
+        ax.tick_params(labelsize=7)
+        ax.grid(alpha=0.3)
+        setting = ", ".join(setting_text(k, row[k]) for k in keys)
+        ax.set_title(
+            f"{setting}\nATE RMSE {row.ate_rmse:.1f} mm as estimated, {row.ate_aligned_rmse:.1f} mm aligned",
+            fontsize=8,
+        )
+    for ax in axes[-1]:
+        ax.set_xlabel("x [m]", fontsize=8)
+    for ax in axes[:, 0]:
+        ax.set_ylabel("y [m]", fontsize=8)
     for ax in list(axes.flat)[len(files) :]:
         ax.axis("off")
     handles, labels = axes.flat[0].get_legend_handles_labels()
-    fig.legend(handles, labels, loc="lower center", ncol=3, fontsize=8)
-    fig.suptitle(f"Final maps of seed {table.seed.min()}, one per grid cell (walls grey)", fontsize=10)
-    fig.tight_layout(rect=(0, 0.05, 1, 0.95))
+    fig.legend(handles, labels, loc="outside lower center", ncol=4, fontsize=8)
+    fig.suptitle(
+        f"{name or out_dir.name}: final map of seed {table.seed.min()}, one per grid cell, "
+        "drawn after the best rigid alignment to the truth",
+        fontsize=10,
+    )
     path = out_dir / "maps.png"
     fig.savefig(path, dpi=110)
     plt.close(fig)
