@@ -131,8 +131,13 @@ def main(noise_scale: float = 1.0):
     blind = table[(table.phase == "blind") & (table.increments >= 1)].reset_index(drop=True).copy()
     matched = [predicted[k - 1] for k in blind.increments]
     blind["predicted_std_major_m"] = [np.sqrt(np.linalg.eigvalsh(c[:2, :2])[1]) for c in matched]
+    blind["predicted_std_minor_m"] = [np.sqrt(np.linalg.eigvalsh(c[:2, :2])[0]) for c in matched]
     blind["predicted_std_theta_deg"] = [np.degrees(np.sqrt(c[2, 2])) for c in matched]
+    blind["major_vs_model"] = blind.std_major_m / blind.predicted_std_major_m
+    blind["minor_vs_model"] = blind.std_minor_m / blind.predicted_std_minor_m
+    blind["theta_vs_model"] = blind.std_theta_deg / blind.predicted_std_theta_deg
     table.to_csv(out / "cloud.csv", index=False)
+    blind.to_csv(out / "blind.csv", index=False)
     _plot_growth(blind, out / "spread_vs_distance.png", noise_scale)
     _plot_snapshots(snapshots, world["walls"], out / "clouds.png", noise_scale)
     after = table[table.phase == "after"].head(6)
@@ -142,6 +147,7 @@ def main(noise_scale: float = 1.0):
         "spread_at_end_of_blind": blind.iloc[-1][["std_major_m", "std_minor_m", "std_theta_deg"]].to_dict(),
         "predicted_at_end_of_blind": blind.iloc[-1][["predicted_std_major_m", "predicted_std_theta_deg"]].to_dict(),
         "error_at_end_of_blind_m": blind.iloc[-1]["error_m"],
+        "vs_model_over_blind_stretch": vs_model(blind),
         "first_scans_after": after[
             ["t", "std_major_m", "std_theta_deg", "ess", "resamplings", "error_m", "truth_mahalanobis_xy"]
         ].to_dict(orient="records"),
@@ -152,28 +158,62 @@ def main(noise_scale: float = 1.0):
     print(json.dumps(summary, indent=1, default=float))
 
 
+def vs_model(blind: pd.DataFrame) -> dict:
+    """The cloud's spread against the odometry model's over the blind stretch (from 0.1 m on, where
+    both have grown past the starting cloud): the ratio particles / model of the major and minor axes
+    and of the heading, its smallest and largest, where the largest departure is, and the share of the stretch
+    within 10 %."""
+    later = blind[blind.travelled_blind_m >= 0.1]
+    summary = {}
+    for name, column in (
+        ("major_axis", "major_vs_model"),
+        ("minor_axis", "minor_vs_model"),
+        ("heading", "theta_vs_model"),
+    ):
+        ratio = later[column]
+        worst = (ratio - 1).abs().idxmax()
+        summary[name] = {
+            "min_ratio": float(ratio.min()),
+            "max_ratio": float(ratio.max()),
+            "largest_departure_ratio": float(ratio[worst]),
+            "largest_departure_at_m": float(later.travelled_blind_m[worst]),
+            "share_within_10_percent": float(((ratio - 1).abs() <= 0.1).mean()),
+            "ratio_at_end": float(ratio.iloc[-1]),
+        }
+    return summary
+
+
 def _plot_growth(blind: pd.DataFrame, path: Path, noise_scale: float) -> None:
-    fig, axes = plt.subplots(1, 2, figsize=(10, 3.8))
+    fig, grid = plt.subplots(2, 2, figsize=(10, 6.4), sharex=True, height_ratios=(2, 1), layout="constrained")
+    axes, ratios = grid[0], grid[1]
     axes[0].plot(blind.travelled_blind_m, 100 * blind.std_major_m, label="particles: major axis")
     axes[0].plot(blind.travelled_blind_m, 100 * blind.std_minor_m, label="particles: minor axis")
     axes[0].plot(blind.travelled_blind_m, 100 * blind.predicted_std_major_m, "--", label="odometry model: major axis")
-    axes[0].set_xlabel("distance travelled without observations [m]")
+    axes[0].plot(blind.travelled_blind_m, 100 * blind.predicted_std_minor_m, ":", label="odometry model: minor axis")
     axes[0].set_ylabel("standard deviation [cm]")
     axes[1].plot(blind.travelled_blind_m, blind.std_theta_deg, label="particles")
     axes[1].plot(blind.travelled_blind_m, blind.predicted_std_theta_deg, "--", label="odometry model")
-    axes[1].set_xlabel("distance travelled without observations [m]")
     axes[1].set_ylabel("heading standard deviation [deg]")
     axes[0].set_title("position spread (1 sigma)", fontsize=10)
     axes[1].set_title("heading spread (1 sigma)", fontsize=10)
-    for ax in axes:
+    panels = ((("major_vs_model", "major axis"), ("minor_vs_model", "minor axis")), (("theta_vs_model", "heading"),))
+    for ax, lines, what in zip(ratios, panels, ("position", "heading")):
+        ax.axhspan(0.9, 1.1, color="0.9", label="within 10 %")
+        ax.axhline(1.0, color="0.5", linewidth=0.8)
+        for (column, name), colour in zip(lines, ("tab:blue", "tab:orange")):
+            ax.plot(blind.travelled_blind_m, blind[column], color=colour, label=f"particles / model, {name}")
+        ax.set_ylabel("particles / model")
+        ax.set_xlabel("distance travelled without observations [m]")
+        ax.set_title(f"{what}: the cloud's spread over the model's (1 = as predicted)", fontsize=10)
+    for ax in grid.flat:
         ax.grid(alpha=0.3)
         ax.legend(fontsize=8)
+        ax.set_xlim(0, float(blind.travelled_blind_m.max()) * 1.02)
     fig.suptitle(
         f"Particle cloud without observations (FastSLAM 1.0, {PARTICLES} particles, "
         f"{noise_scale:g} x the default odometry noise), seed 0",
         fontsize=10,
     )
-    fig.tight_layout()
     fig.savefig(path, dpi=110)
     plt.close(fig)
 
