@@ -11,7 +11,7 @@ from mazeslam.envs.laser import LaserParams, cast_rays
 from mazeslam.envs.maze import generate_maze, load_maze
 from mazeslam.envs.odometry import OdometryParams
 from mazeslam.envs.policies import ScriptedPolicy, load_commands
-from mazeslam.envs.simulator import MazeParams, SimulationConfig, load_config
+from mazeslam.envs.simulator import LoggerParams, MazeParams, SimulationConfig, load_config
 from mazeslam.filters.motion import dead_reckoning
 from mazeslam.geometry import compose
 
@@ -111,6 +111,18 @@ def test_odometry_glitches_change_only_the_listed_records_and_leave_the_truth(tm
             np.testing.assert_allclose(difference[index] + difference[following[0]], 0.0, atol=2e-6)
         elif kind == "lone":
             np.testing.assert_allclose(difference[index], [-2 * glitchy.odometry.glitch_distance, 0.0], atol=2e-6)
+
+
+def test_a_logger_that_scans_between_odometry_records(tmp_path):
+    logger = LoggerParams(scan_period=0.75, odometry_rate=4.0, odometry_with_scan=False, scan_phase=-0.06)
+    config = dataclasses.replace(SimulationConfig(), logger=logger)
+    course_log = log.read(simulate(tmp_path / "lag.log", config=config, seed=2, duration=20, progress=False).log_path)
+    scan_times, odometry_times = course_log.times[course_log.is_scan], course_log.times[course_log.is_odometry]
+    np.testing.assert_allclose(scan_times, 0.75 * np.arange(1, len(scan_times) + 1) - 0.06, atol=0.011)
+    assert not set(np.round(scan_times, 6)) & set(np.round(odometry_times, 6))
+    assert len(odometry_times) == pytest.approx(4 * 20, abs=1)
+    before = [scan - odometry_times[odometry_times < scan].max() for scan in scan_times]
+    np.testing.assert_allclose(before, 0.19, atol=0.011)  # 4 Hz: the record 0.25 - 0.06 s before
 
 
 def test_explorer_visits_every_cell_and_returns(default_run):

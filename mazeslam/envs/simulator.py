@@ -2,10 +2,11 @@
 
 ``simulate`` runs the physics at ``physics_rate`` Hz. Like the exercise's logger (its Main.m), it
 writes an odometry record every ``1 / odometry_rate`` s (F_O_U) and a scan every ``scan_period`` s
-(T_b_S) with ``laser.beams`` beams (N). Before every scan the logger also reads the encoders, so an
-odometry record with the same timestamp precedes each scan: the scan is taken exactly at the pose
-the odometry up to it describes (a logger that scans between encoder reads makes the filter place
-the scan at a pose up to 1/F_O_U seconds old).
+(T_b_S) with ``laser.beams`` beams (N). By default the logger also reads the encoders before every
+scan, so an odometry record with the same timestamp precedes each scan: the scan is taken exactly
+at the pose the odometry up to it describes. With ``odometry_with_scan = false`` it does not, as
+the course robot's logger (log1 scans 0.26 s after its last odometry record): a filter that places
+a scan at the last odometry pose then places it at a pose up to 1/F_O_U seconds old.
 
 With ``odometry.glitch_rate`` above 0 some odometry records are glitches (``OdometryGlitches``); the
 map sidecar then lists them as ``odometry_glitches``: ``[record index, kind]`` pairs, the index
@@ -40,14 +41,24 @@ class LoggerParams:
         scan_period: T_b_S, seconds between two scans.
         odometry_rate: F_O_U, odometry records per second.
         physics_rate: physics steps per second (not in the exercise; the simulator's time step).
+        odometry_with_scan: read the encoders with every scan (an odometry record with the scan's
+            timestamp precedes it); false: only every 1 / odometry_rate s.
+        scan_phase: seconds added to every scan's time (the first scan at scan_period + scan_phase):
+            where the scans fall between the odometry records when they are not read together.
     """
 
     scan_period: float = 0.75
     odometry_rate: float = 5.0
     physics_rate: float = 50.0
+    odometry_with_scan: bool = True
+    scan_phase: float = 0.0
 
     def __post_init__(self):
         require(self.scan_period > 0, f"logger scan_period must be positive, got {self.scan_period}")
+        require(
+            abs(self.scan_phase) < self.scan_period,
+            f"logger scan_phase must be within +-scan_period ({self.scan_period} s), got {self.scan_phase}",
+        )
         require(self.odometry_rate > 0, f"logger odometry_rate must be positive, got {self.odometry_rate}")
         require(self.physics_rate <= 10_000, f"logger physics_rate must be at most 10000 Hz, got {self.physics_rate}")
         require(
@@ -183,7 +194,7 @@ def simulate(
     )
     with LogWriter(out, config.laser.beams) as writer:
         step = 0
-        next_odometry, next_scan = steps_per_odometry, steps_per_scan
+        next_odometry, next_scan = steps_per_odometry, steps_per_scan + logger.scan_phase / dt
         while step * dt < end_time - 1e-9 and (duration is not None or not policy.done):
             speed, turn_rate = policy(step * dt, world.pose)
             left_speed, right_speed = config.robot.wheel_speeds(speed, turn_rate)
@@ -191,8 +202,9 @@ def simulate(
             step += 1
             t = step * dt
             scan_due = step >= next_scan - 1e-6
-            if scan_due or step >= next_odometry - 1e-6:
-                if step >= next_odometry - 1e-6:
+            odometry_due = step >= next_odometry - 1e-6
+            if odometry_due or (scan_due and logger.odometry_with_scan):
+                if odometry_due:
                     next_odometry += steps_per_odometry
                 distance, turn, glitch = glitches.apply(*encoders.read())
                 if glitch:
