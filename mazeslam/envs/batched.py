@@ -27,6 +27,9 @@ from mazeslam.envs.walls import block_edges, solid_blocks
 #: Smallest |direction component| of a ray; smaller ones are raised to it (the ray then never
 #: reaches the next edge along that axis within any range).
 TINY_COMPONENT = 1e-12
+#: ``MazeGrids.cast`` looks at every band crossing within range in one pass when the rays times
+#: those crossings are at most this many (small casts: fewer passes), else at two per pass.
+LOOK_ALL_BELOW = 4096
 
 
 @dataclass
@@ -84,57 +87,62 @@ class MazeGrids:
         max_range: float,
     ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Cast beams from K sensors, sensor k at (x[k], y[k]) (m) facing ``heading[k]`` (rad) in maze
-        ``envs[k]``, along ``bearings`` (N,) (rad, sensor frame).
+        ``envs[k]``, along ``bearings`` (N,) (rad, sensor frame). Every sensor must stand in free space.
 
         Returns ``(distances, faces, along)``, all (K, N): metres to the first wall (``inf`` where
         none lies within ``max_range``); the wall face hit: ``f >= 0`` the vertical face on
         ``x = xs[f]``, ``f < 0`` the horizontal face on ``y = ys[-1 - f]``; and where along that
         face, metres (y on a vertical face, x on a horizontal one). Faces and ``along`` are
         meaningless where the distance is inf.
+
+        A ray enters a solid block only where it enters a wall band (cell interiors are free), so
+        only its crossings into the bands ``k s -+ t/2`` are looked at, a few per axis at a time
+        (``lookahead``) for all rays at once (see ``_BandCrossings``).
         """
         count, beams = len(envs), len(bearings)
-        cos_h, sin_h = np.cos(heading)[:, None], np.sin(heading)[:, None]
-        dx = (cos_h * np.cos(bearings) - sin_h * np.sin(bearings)).ravel()
-        dy = (sin_h * np.cos(bearings) + cos_h * np.sin(bearings)).ravel()
-        dx[np.abs(dx) < TINY_COMPONENT] = TINY_COMPONENT
-        dy[np.abs(dy) < TINY_COMPONENT] = TINY_COMPONENT
-        height, width = self.solid.shape[1:]
-        i, j = (np.repeat(index, beams) for index in self.blocks_of(x, y))
-        step_x, step_y = np.where(dx > 0, 1, -1), np.where(dy > 0, 1, -1)
-        # Per active ray: ray index, next x edge, next y edge, flat block index, x step, y step, flat y step.
-        ints = np.stack(
-            [
-                np.arange(count * beams),
-                j + (step_x > 0),
-                i + (step_y > 0),
-                np.repeat(envs * height * width, beams) + i * width + j,
-                step_x,
-                step_y,
-                step_y * width,
-            ]
-        )
-        origin_x, origin_y = np.repeat(x, beams), np.repeat(y, beams)
-        floats = np.stack([origin_x, origin_y, 1 / dx, 1 / dy])
+        origin = np.stack([x, y])[:, :, None]  # (2, K, 1), m
+        direction = _directions(heading, bearings)  # (2, K, N)
+        crossings = _BandCrossings(self, origin, direction, envs)
         distances = np.full(count * beams, np.inf)
-        faces = np.zeros(count * beams, dtype=np.int64)
-        solid = self.solid.ravel()
-        while ints.shape[1]:
-            ray, edge_x, edge_y, block, step_x, step_y, step_block_y = ints
-            to_x = (self.xs[edge_x] - floats[0]) * floats[2]  # distance to the next x edge
-            to_y = (self.ys[edge_y] - floats[1]) * floats[3]
-            across_x = to_x <= to_y
-            face = np.where(across_x, edge_x, -1 - edge_y)
-            distance = np.where(across_x, to_x, to_y)
-            edge_x += step_x * across_x
-            edge_y += step_y * ~across_x
-            block += np.where(across_x, step_x, step_block_y)
-            done = solid[block] | (distance > max_range)
-            distances[ray[done]] = distance[done]
-            faces[ray[done]] = face[done]
-            ints, floats = ints[:, ~done], floats[:, ~done]
+        across_x = np.zeros(count * beams, dtype=bool)
+        active = np.arange(count * beams)
+        lookahead = self._lookahead(len(active), max_range)
+        while len(active):
+            hit, hit_x, done, limit = crossings.look(lookahead, max_range)
+            distances[active[done]] = hit[done]
+            across_x[active[done]] = hit_x[done]
+            active = active[~done]
+            crossings.advance(~done, limit, lookahead)
+            lookahead = self._lookahead(len(active), max_range)
+        shape = (count, beams)
+        faces, along, distances = self._faces(origin, direction, distances.reshape(shape), across_x.reshape(shape))
         distances[distances > max_range] = np.inf
-        along = np.where(faces >= 0, origin_y + distances * dy, origin_x + distances * dx)
-        return distances.reshape(count, beams), faces.reshape(count, beams), along.reshape(count, beams)
+        return distances, faces, along
+
+    def _lookahead(self, rays: int, max_range: float) -> int:
+        """Band crossings per axis looked at per ray in one pass: all within ``max_range`` when few
+        rays remain (one pass, no bookkeeping), else two (most rays meet a wall within two cells)."""
+        within_range = math.floor(max_range / self.cell_size) + 1
+        return within_range if rays * within_range <= LOOK_ALL_BELOW else min(2, within_range)
+
+    def _faces(self, origin, direction, distances, across_x):
+        """The faces hit (as ``cast`` returns them) by the rays from ``origin`` (2, K, 1) (m) along
+        ``direction`` (2, K, N) at about ``distances`` (K, N) (m, inf: none), through a vertical
+        face where ``across_x`` (K, N): ``(faces, along, distances)``, all (K, N), the distances
+        now measured exactly to the faces' block edges."""
+        s, half = self.cell_size, self.thickness / 2
+        origin, other = (np.where(across_x, origin[k], origin[1 - k]) for k in (0, 1))
+        normal, sideways = (np.where(across_x, direction[k], direction[1 - k]) for k in (0, 1))
+        finite = np.isfinite(distances)
+        # The face of band k is on k s - t/2 (entered moving up) or k s + t/2 (moving down):
+        # block edge 2k or 2k + 1.
+        reached = origin + np.where(finite, distances, 0.0) * normal
+        edge = 2 * np.rint((reached + np.where(normal > 0, half, -half)) / s).astype(np.int64) + (normal < 0)
+        edges = np.concatenate([self.xs, self.ys])
+        position = edges[np.clip(np.where(across_x, edge, len(self.xs) + edge), 0, len(edges) - 1)]
+        exact = np.where(finite, (position - origin) / normal, np.inf)
+        along = other + np.where(finite, exact, 0.0) * sideways
+        return np.where(across_x, edge, -1 - edge), along, exact
 
     # -- wall faces seen --------------------------------------------------------------------
     def bin_counts(self, spacing: float) -> tuple[int, int]:
@@ -184,7 +192,9 @@ class MazeGrids:
         """The solid blocks that a disc of radius ``reach`` (m) centred at (x[e], y[e]) in maze e
         may overlap: (E, B, 4) boxes ``[xmin, ymin, xmax, ymax]`` (m), the other blocks of the
         neighbourhood as boxes at infinity."""
-        bands = 2 * math.ceil(reach / self.cell_size)  # blocks a disc reaches from its centre's
+        # Blocks a disc reaches from its centre's: the next band on each side while it reaches less
+        # than a cell's free width (solid blocks lie in wall bands only, one cell apart).
+        bands = 1 if reach < self.cell_size - self.thickness else 2 * math.ceil(reach / self.cell_size)
         offsets = np.arange(-bands, bands + 1)
         height, width = self.solid.shape[1:]
         i, j = self.blocks_of(x, y)
@@ -221,6 +231,92 @@ def push_out(x: np.ndarray, y: np.ndarray, radius: float, boxes: np.ndarray, ite
         x[hit] += gap_x[hit, nearest] * scale
         y[hit] += gap_y[hit, nearest] * scale
     return touched
+
+
+class _BandCrossings:
+    """The rays of one ``MazeGrids.cast`` still flying, and their next crossings into wall bands.
+
+    Along each axis a ray enters the wall band of grid line k (``k s -+ t/2``) at
+    ``t = first + n * spacing`` (m along the ray), n = 0, 1, ... from its next band on; there it
+    enters the block of band 2k along that axis and, across it, of the band the other coordinate
+    lies in. The first solid block entered on either axis is the hit, certain once no crossing not
+    yet looked at lies nearer. The distances here are float32 (to about 1e-7 m), enough to tell
+    which face a ray meets (``MazeGrids.cast`` then measures the distance to it exactly).
+
+    Per axis a (0: x, 1: y) and ray, ``floats[:, a]`` (4, 2, R) float32 holds ``first``,
+    ``spacing`` (m), ``offset`` and ``rate``; ``ints[:, a]`` (2, 2, R) int32 ``start`` and
+    ``stride``: the flat index (into ``solid``) of crossing n's block is ``start + n * stride +
+    across * band``, ``across`` the flat stride of the other axis (2C+1 or 1) and ``band =
+    floor(u) + floor(u - t/s)`` (+ 1 in ``start``) for ``u = offset + t * rate``, the other
+    coordinate at the crossing in cells, shifted by t/2. A crossing past the maze's outer wall
+    may index any block: it lies beyond a solid crossing of the same ray (the outer wall is
+    closed), and ``look`` never takes it for the hit.
+    """
+
+    def __init__(self, grids: MazeGrids, origin: np.ndarray, direction: np.ndarray, envs: np.ndarray):
+        """Rays from ``origin`` (2, K, 1) (m) in maze ``envs[k]`` along ``direction`` (2, K, N)."""
+        s, half = grids.cell_size, grids.thickness / 2
+        height, width = grids.solid.shape[1:]
+        self.solid = grids.solid.ravel()
+        self.thin = np.float32(grids.thickness / s)  # share of a cell's width a wall band takes
+        self.across = np.array([width, 1], dtype=np.int32)[:, None, None]
+        up = direction > 0
+        inverse = 1 / np.abs(direction)
+        # Along each axis, in the ray's own sense: q the origin's coordinate + t/2, and the first
+        # band entered that of line index ``sense * lines`` (its near face at lines * s - t/2).
+        q = np.where(up, origin + half, half - origin)
+        lines = np.floor(q / s) + 1
+        rays = direction.shape[1] * direction.shape[2]
+        self.floats = np.empty((4, 2, rays), dtype=np.float32)
+        floats = self.floats.reshape(4, *direction.shape)
+        np.multiply(lines * s - q, inverse, out=floats[0])  # first
+        np.multiply(s, inverse, out=floats[1])  # spacing
+        floats[2] = (origin[::-1] + half) / s  # offset
+        np.multiply(direction[::-1], 1 / s, out=floats[3])  # rate
+        unit = np.array([1, width])[:, None, None]  # flat stride of a block along x, along y
+        base = (envs * (height * width))[:, None] + self.across  # band 1 across (+ 2 floors)
+        self.ints = np.empty((2, 2, rays), dtype=np.int32)
+        ints = self.ints.reshape(2, *direction.shape)
+        ints[1] = np.where(up, 2 * unit, -2 * unit)  # stride
+        ints[0] = base + ints[1] * lines  # start: band 2k of line k = sense * lines
+
+    def look(self, lookahead: int, max_range: float) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """Look at the next ``lookahead`` band crossings per axis of every ray; return (R,) arrays:
+        the nearest solid one (m, inf if none), whether it is an x crossing (vertical face),
+        whether the ray is done (that hit is certain, or nothing within ``max_range`` is left),
+        and the nearest crossing not looked at (m)."""
+        first, spacing, offset, rate = (part[:, None] for part in self.floats)  # (2, 1, R)
+        start, stride = (part[:, None] for part in self.ints)
+        n = np.arange(lookahead, dtype=np.float32)[:, None]  # (L, 1)
+        t = first + n * spacing  # (2, L, R), m
+        u = offset + t * rate
+        band = (np.floor(u) + np.floor(u - self.thin)).astype(np.int32)
+        index = start + n.astype(np.int32) * stride + self.across * band
+        np.clip(index, 0, len(self.solid) - 1, out=index)
+        hits = np.where(self.solid[index], t, np.float32(np.inf)).min(axis=1)  # (2, R)
+        hit = hits.min(axis=0)
+        limit = (t[:, -1] + spacing[:, 0]).min(axis=0)  # the nearest crossing not looked at
+        return hit, hits[0] <= hits[1], (hit <= limit) | (limit > max_range), limit
+
+    def advance(self, keep: np.ndarray, limit: np.ndarray, lookahead: int) -> None:
+        """Keep the rays where ``keep`` (R,) holds, moved past their crossings nearer than ``limit``
+        (m) (``look``ed at with ``lookahead`` and found free)."""
+        self.floats, self.ints = self.floats[..., keep], self.ints[..., keep]
+        first, spacing = self.floats[:2]
+        passed = np.floor((limit[keep] - first) / spacing) + 1
+        passed = np.minimum(np.maximum(passed, 0), lookahead).astype(np.int32)
+        first += passed * spacing
+        self.ints[0] += passed * self.ints[1]
+
+
+def _directions(heading: np.ndarray, bearings: np.ndarray) -> np.ndarray:
+    """(2, K, N) world unit vectors (x, y) of the beams ``bearings`` (N,) (rad) of sensors facing
+    ``heading`` (K,) (rad); components under ``TINY_COMPONENT`` raised to it."""
+    cos_h, sin_h = np.cos(heading)[:, None], np.sin(heading)[:, None]
+    cos_b, sin_b = np.cos(bearings), np.sin(bearings)
+    direction = np.stack([cos_h * cos_b - sin_h * sin_b, sin_h * cos_b + cos_h * sin_b])
+    direction[np.abs(direction) < TINY_COMPONENT] = TINY_COMPONENT
+    return direction
 
 
 def _band(coordinate: np.ndarray, cell_size: float, thickness: float) -> np.ndarray:

@@ -80,12 +80,12 @@ class DriveEnv(gym.Env):
         """Count a step and turn its action into (left, right) wheel speeds, m/s."""
         if self.steps is None:
             raise RuntimeError("call reset() before step()")
-        action = np.clip(np.asarray(action, dtype=float), -1.0, 1.0)
+        first, second = (min(max(float(value), -1.0), 1.0) for value in np.asarray(action, dtype=float).ravel()[:2])
         self.steps += 1
         robot = self.config.robot
         if self.action_type == "wheels":
-            return float(action[0]) * robot.max_wheel_speed, float(action[1]) * robot.max_wheel_speed
-        return robot.wheel_speeds(float(action[0]) * robot.max_wheel_speed, float(action[1]) * self.top_turn_rate)
+            return first * robot.max_wheel_speed, second * robot.max_wheel_speed
+        return robot.wheel_speeds(first * robot.max_wheel_speed, second * self.top_turn_rate)
 
     def _observation(self, distance: float = 0.0, turn: float = 0.0) -> dict:
         """The observation: ``last_scan`` and the odometry increment (m, rad)."""

@@ -114,6 +114,26 @@ class RayCaster:
     def cast(self, x: float, y: float, heading: float) -> np.ndarray:
         """Distances (N,) in metres from a sensor at (x, y) facing ``heading`` to the first wall
         along each beam; ``inf`` where no wall lies within ``max_range``."""
+        beam, _, t, _ = self._crossings(x, y, heading)
+        distances = np.full(len(self.bearings), np.inf)
+        np.minimum.at(distances, beam, t)
+        return distances
+
+    def hits(self, x: float, y: float, heading: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """As ``cast``, with where each beam lands: ``(distances, walls, fractions)``, all (N,): the
+        distances (m, inf: none within ``max_range``), the index of the wall segment hit (-1: none)
+        and how far along it from its first end (0 to 1)."""
+        beam, segment, t, s = self._crossings(x, y, heading)
+        distances = np.full(len(self.bearings), np.inf)
+        np.minimum.at(distances, beam, t)
+        nearest = t == distances[beam]
+        walls, fractions = np.full(len(self.bearings), -1), np.zeros(len(self.bearings))
+        walls[beam[nearest]], fractions[beam[nearest]] = segment[nearest], s[nearest]
+        return distances, walls, fractions
+
+    def _crossings(self, x: float, y: float, heading: float):
+        """Every beam's crossings with the walls within ``max_range``: (M,) arrays of the beam
+        index, the wall segment index, the distance (m) and the fraction along the segment."""
         gap = np.maximum(np.maximum(self.box_low - (x, y), (x, y) - self.box_high), 0.0)
         near = np.flatnonzero(np.einsum("ij,ij->i", gap, gap) <= self.max_range**2)
         px, py = self.start_x[near] - x, self.start_y[near] - y  # wall starts relative to the sensor
@@ -129,9 +149,7 @@ class RayCaster:
         t = (px * ey - py * ex) / denom
         s = (px * dy - py * dx) / denom
         hit = (t > 0) & (s >= 0) & (s <= 1) & (t <= self.max_range)
-        distances = np.full(len(self.bearings), np.inf)
-        np.minimum.at(distances, beam[hit], t[hit])
-        return distances
+        return beam[hit], near[segment[hit]], t[hit], s[hit]
 
     def _beams_facing(self, x1, y1, x2, y2, heading: float):
         """Pairs ``(segment index, beam index)`` of every beam whose bearing lies within the angle a

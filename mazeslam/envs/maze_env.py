@@ -6,7 +6,6 @@ import math
 
 import gymnasium as gym
 import numpy as np
-from scipy.spatial import cKDTree
 
 from mazeslam.envs.drive_env import DriveEnv
 from mazeslam.envs.maze import Maze, generate_maze, load_maze
@@ -97,23 +96,26 @@ class MazeEnv(DriveEnv):
         self.start_pose = draw_start_pose(maze, options, self.np_random)
         self.simulated = SimulatedRobot(maze, self.config, start_pose=self.start_pose, rng=self.np_random)
         self.walls, self.laser = self.simulated.walls, self.simulated.laser
-        self._samples = _wall_samples(self.walls.surfaces)
-        self._sample_tree = cKDTree(self._samples)
+        self._samples, self._sample_counts = _wall_samples(self.walls.surfaces)
+        self._sample_starts = np.cumsum(self._sample_counts) - self._sample_counts
         self.seen = np.zeros(len(self._samples), dtype=bool)
+        self._seen_count = 0
         self.visited = np.zeros((maze.rows, maze.cols), dtype=bool)
         self.visited[maze.cell_of(*self.start_pose[:2])] = True
-        self._see()
-        return self._observation(), self._info(collision=False)
+        pose = self.simulated.pose
+        self._see(pose)
+        return self._observation(), self._info(pose, collision=False)
 
     def step(self, action):
         self.simulated.set_wheel_speeds(*self._command(action))
         collision = self.simulated.advance(self.physics_steps / self.config.logger.physics_rate)
         self.time = self.simulated.time
         distance, turn = self.simulated.read_odometry()
-        cell = self.simulated.maze.cell_of(*self.simulated.pose[:2])  # the episode's maze
+        pose = self.simulated.pose
+        cell = self.simulated.maze.cell_of(pose[0], pose[1])  # the episode's maze
         new_cell = not self.visited[cell]
         self.visited[cell] = True
-        newly_seen = self._see()
+        newly_seen = self._see(pose)
         reward = (
             self.wall_reward * newly_seen * WALL_SAMPLE_SPACING
             + self.cell_reward * new_cell
@@ -123,30 +125,32 @@ class MazeEnv(DriveEnv):
         truncated = self.max_steps is not None and self.steps >= self.max_steps
         if self.render_mode == "human":
             self.render()
-        return self._observation(distance, turn), float(reward), terminated, truncated, self._info(collision)
+        return self._observation(distance, turn), float(reward), terminated, truncated, self._info(pose, collision)
 
     @property
     def world(self):
         """The simulated robot's pymunk world (its ``pose`` is the truth)."""
         return self.simulated.world
 
-    def _see(self) -> int:
-        """Scan (into ``last_scan``) and mark the wall samples its noise-free beams land on; return
-        how many are new."""
-        ranges = self.simulated.true_ranges()  # inf where no wall lies within the laser's range
+    def _see(self, pose: np.ndarray) -> int:
+        """Scan from the robot's true ``pose`` (into ``last_scan``) and mark the wall samples its
+        noise-free beams land on (on the wall face a beam meets, the sample nearest to where it
+        lands, always within ``WALL_SAMPLE_SPACING``); return how many are new."""
+        sensor_x, sensor_y = transform_points(pose, self.laser.mount)
+        # The laser's own ray cast (as ``true_ranges``), with the wall each beam lands on.
+        ranges, walls, fractions = self.laser.caster.hits(float(sensor_x), float(sensor_y), float(pose[2]))
         self.last_scan = self.simulated.read_scan(ranges).astype(np.float32)
-        laser = self.config.laser
-        points = transform_points(self.simulated.pose, laser.geometry.returns(ranges, max_range=laser.max_range))
-        _, nearest = self._sample_tree.query(points, distance_upper_bound=WALL_SAMPLE_SPACING)
-        nearest = nearest[nearest < len(self._samples)]
-        before = int(self.seen.sum())
-        self.seen[nearest] = True
-        return int(self.seen.sum()) - before
+        hit = walls >= 0
+        counts = self._sample_counts[walls[hit]]
+        along = np.minimum((fractions[hit] * counts).astype(np.int64), counts - 1)
+        self.seen[self._sample_starts[walls[hit]] + along] = True
+        before, self._seen_count = self._seen_count, int(np.count_nonzero(self.seen))
+        return self._seen_count - before
 
-    def _info(self, collision: bool) -> dict:
+    def _info(self, pose: np.ndarray, collision: bool) -> dict:
         return {
-            "pose": self.simulated.pose,
-            "coverage": float(self.seen.mean()),
+            "pose": pose,
+            "coverage": self._seen_count / len(self.seen),
             "visited": float(self.visited.mean()),
             "collision": bool(collision),
             "time": self.time,
@@ -215,11 +219,13 @@ def draw_start_pose(maze: Maze, options: dict, rng: np.random.Generator) -> np.n
     return np.array([*maze.cell_center(*start_cell), heading])
 
 
-def _wall_samples(surfaces: np.ndarray) -> np.ndarray:
-    """Points every ``WALL_SAMPLE_SPACING`` metres along each wall surface (S, 2)."""
-    chunks = []
-    for x1, y1, x2, y2 in surfaces:
-        count = max(1, int(round(math.hypot(x2 - x1, y2 - y1) / WALL_SAMPLE_SPACING)))
-        t = (np.arange(count) + 0.5) / count
-        chunks.append(np.column_stack([x1 + t * (x2 - x1), y1 + t * (y2 - y1)]))
-    return np.concatenate(chunks)
+def _wall_samples(surfaces: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Points about every ``WALL_SAMPLE_SPACING`` metres along each wall surface (W, 4): (S, 2)
+    the samples, surface after surface, each at the centre of an equal share of its surface, and
+    (W,) how many each surface has."""
+    counts = np.maximum(1, np.rint(np.hypot(*(surfaces[:, 2:] - surfaces[:, :2]).T) / WALL_SAMPLE_SPACING))
+    counts = counts.astype(np.int64)
+    surface = np.repeat(np.arange(len(surfaces)), counts)
+    t = (np.arange(counts.sum()) - np.repeat(np.cumsum(counts) - counts, counts) + 0.5) / counts[surface]
+    start, end = surfaces[surface, :2], surfaces[surface, 2:]
+    return start + t[:, None] * (end - start), counts

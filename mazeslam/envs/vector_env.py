@@ -29,6 +29,9 @@ from mazeslam.envs.simulator import SimulationConfig
 from mazeslam.envs.walls import WallGeometry, wall_geometry
 from mazeslam.geometry import wrap_angle
 
+#: Steps of random draws an env takes from its generator at a time (``MazeVectorEnv._draw``).
+DRAW_AHEAD = 32
+
 
 class MazeVectorEnv(VectorEnv):
     """``num_envs`` copies of ``mazeslam/Maze-v0`` stepped together (see ``MazeEnv`` for the
@@ -102,6 +105,11 @@ class MazeVectorEnv(VectorEnv):
         self._reported = np.zeros((num_envs, 2), dtype=np.int64)  # encoder steps already reported
         self._collision = np.zeros(num_envs, dtype=bool)
         self._autoreset = np.zeros(num_envs, dtype=bool)
+        # Random draws made ahead (``_draw``): per env, DRAW_AHEAD steps of normals (slip, noise)
+        # and of dropout uniforms, and how many steps of them are used.
+        self._normals = np.zeros((num_envs, DRAW_AHEAD, 2 * self.physics_steps + laser.beams))
+        self._uniforms = np.ones((num_envs, DRAW_AHEAD, laser.beams)) if laser.dropout else None
+        self._drawn = np.full(num_envs, DRAW_AHEAD)
 
     # -- episode ------------------------------------------------------------------------------
     def reset(self, *, seed: int | list[int | None] | None = None, options: dict | None = None):
@@ -142,6 +150,7 @@ class MazeVectorEnv(VectorEnv):
         for env, seed in zip(envs, seeds):
             if seed is not None or self.generators[env] is None:
                 self.generators[env], _ = seeding.np_random(seed)
+                self._drawn[env] = DRAW_AHEAD  # nothing drawn yet from the new generator
             rng = self.generators[env]
             maze = choose_maze(
                 options, self.maze_option, self.rows, self.cols, self.loop_fraction, self.config.maze, rng
@@ -188,18 +197,32 @@ class MazeVectorEnv(VectorEnv):
         self.seen_counts = np.zeros(self.num_envs, dtype=np.int64)
         self.visited = np.zeros((self.num_envs, maze.rows, maze.cols), dtype=bool)
 
-    def _draw(self, envs: np.ndarray):
-        """Each listed env's random draws for one step, from its own generator: standard normals
-        for the wheel slip (E, physics steps, 2) and the range noise (E, N), and uniforms for the
-        dropouts (E, N); the other envs' rows are zeros (uniforms: ones, never dropped)."""
-        beams, steps = self.config.laser.beams, self.physics_steps
-        normals = np.zeros((self.num_envs, 2 * steps + beams))
-        uniforms = np.ones((self.num_envs, beams))
-        for env in envs:
-            normals[env] = self.generators[env].standard_normal(normals.shape[1])
-            if self.config.laser.dropout:
-                uniforms[env] = self.generators[env].random(beams)
+    def _draw(self, envs: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The listed envs' random draws for one step, from each env's own generator: standard
+        normals for the wheel slip (E', physics steps, 2) and the range noise (E', N), and uniforms
+        for the dropouts (E', N) (ones without dropouts: never dropped). Each generator is drawn
+        ``DRAW_AHEAD`` steps at a time (normals, then uniforms), so the draws of an env depend on
+        its own history only."""
+        empty = envs[self._drawn[envs] == DRAW_AHEAD]
+        for env in empty:
+            self._draw_ahead(env)
+        rows = self._drawn[envs]
+        self._drawn[envs] += 1
+        normals, steps = self._normals[envs, rows], self.physics_steps
+        if self._uniforms is None:
+            uniforms = np.ones((len(envs), self.config.laser.beams))
+        else:
+            uniforms = self._uniforms[envs, rows]
         return normals[:, : 2 * steps].reshape(-1, steps, 2), normals[:, 2 * steps :], uniforms
+
+    def _draw_ahead(self, env: int) -> None:
+        """Refill env ``env``'s ``DRAW_AHEAD`` steps of draws from its generator."""
+        rng = self.generators[env]
+        assert rng is not None  # reset first
+        self._normals[env] = rng.standard_normal(self._normals.shape[1:])
+        if self._uniforms is not None:
+            self._uniforms[env] = rng.random(self._uniforms.shape[1:])
+        self._drawn[env] = 0
 
     # -- physics ------------------------------------------------------------------------------
     def _wheel_speeds(self, actions: np.ndarray) -> np.ndarray:
@@ -246,7 +269,8 @@ class MazeVectorEnv(VectorEnv):
 
     # -- sensing ------------------------------------------------------------------------------
     def _observe(self, envs: np.ndarray, noise: np.ndarray, uniforms: np.ndarray):
-        """Scan from the listed envs' poses (into ``last_scan``), count the wall bins their noise-free
+        """Scan from the listed envs' poses (into ``last_scan``), with their range ``noise`` (E', N)
+        (standard normals) and dropout ``uniforms`` (E', N); count the wall bins their noise-free
         beams land on and the cells they stand in; return (E,) newly seen bins and (E,) new cells."""
         laser = self.config.laser
         x, y, heading = self.poses[envs].T
@@ -255,9 +279,9 @@ class MazeVectorEnv(VectorEnv):
         sensor_y = y + mount_x * np.sin(heading) + mount_y * np.cos(heading)
         grids = self._grids()
         ranges, faces, along = grids.cast(envs, sensor_x, sensor_y, heading, self.bearings, laser.max_range)
-        noisy = ranges + noise[envs] * laser.range_noise_std
+        noisy = ranges + noise * laser.range_noise_std
         valid = np.isfinite(ranges) & (noisy >= laser.min_range) & (noisy <= laser.max_range)
-        self.last_scan[envs] = np.where(valid & (uniforms[envs] >= laser.dropout), noisy, 0.0)
+        self.last_scan[envs] = np.where(valid & (uniforms >= laser.dropout), noisy, 0.0)
         hit = np.isfinite(ranges)
         bins = np.broadcast_to(envs[:, None], hit.shape)[hit] * self.seen.shape[1] + grids.face_bins(
             faces[hit], along[hit], WALL_SAMPLE_SPACING

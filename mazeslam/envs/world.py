@@ -9,6 +9,7 @@ its wheel-axle centre: x, y in metres, theta in radians, world frame.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -90,7 +91,7 @@ class World:
         speed = 0.5 * (left_travel + right_travel) / dt
         turn_rate = (right_travel - left_travel) / (self.robot.wheelbase * dt)
         heading = self.body.angle + 0.5 * turn_rate * dt  # midpoint heading over the step
-        self.body.velocity = (speed * np.cos(heading), speed * np.sin(heading))
+        self.body.velocity = (speed * math.cos(heading), speed * math.sin(heading))
         self.body.angular_velocity = turn_rate
         self.space.step(dt)
         return self._push_out_of_walls()
