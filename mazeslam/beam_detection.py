@@ -16,8 +16,12 @@ are used. The score of a candidate is the mean over the pairs, in metres.
 
 from __future__ import annotations
 
+import dataclasses
+import hashlib
+import json
 import math
 from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
 from scipy.spatial import cKDTree
@@ -25,6 +29,7 @@ from scipy.spatial import cKDTree
 from mazeslam import log
 from mazeslam.beams import BeamGeometry
 from mazeslam.geometry import advance_pose, compose, relative, wrap_angle
+from mazeslam.loaded_run import LoadedRun
 
 
 @dataclass(frozen=True)
@@ -66,8 +71,15 @@ def detect_beam_convention(
     step_degrees: float = 1.0,
     max_pairs: int = 40,
     separation: float = 20.0,
+    coarse_degrees: float = 5.0,
+    refined: int = 2,
+    max_points: int = 100,
 ) -> Detection:
-    """Score first-beam angles every ``step_degrees`` over the full circle, both directions."""
+    """Score first-beam angles over the full circle, both directions: every ``coarse_degrees``,
+    then every ``step_degrees`` within one coarse step of the ``refined`` best coarse angles of
+    each direction (the score changes smoothly with the angle: the shift ``R(-phi0) t`` turns).
+    Of each pair's second scan at most ``max_points`` evenly spaced points are matched (the
+    median distance needs no more)."""
     if course_log.n_beams is None:
         raise ValueError(f"{course_log.source}: no scans to detect a beam convention from")
     # Full-circle scans (the course logs); a front fan's angles are known from its format.
@@ -75,26 +87,23 @@ def detect_beam_convention(
     pairs = _scan_pairs(course_log, mount_x, jump_tolerance, max_pairs)
     if not pairs:
         raise ValueError(f"{course_log.source}: the robot never moves between two scans; nothing to detect from")
-    angles = np.radians(np.arange(0.0, 360.0, step_degrees))
+    coarse = np.radians(np.arange(0.0, 360.0, coarse_degrees))
     candidates = []
     for direction in (1, -1):
         bearings = BeamGeometry(first_beam_angle=0.0, direction=direction).bearings(n)  # q: phi0 = 0
-        totals = np.zeros(len(angles))
-        for (a, b), motion in pairs:
-            q_a = _points(course_log.values[a], bearings, min_range, max_range)
-            q_b = _points(course_log.values[b], bearings, min_range, max_range)
-            if len(q_a) < 3 or len(q_b) < 3:
-                continue
-            tree = cKDTree(q_a)
-            dtheta = motion[2]
-            moved = q_b @ np.array([[math.cos(dtheta), math.sin(dtheta)], [-math.sin(dtheta), math.cos(dtheta)]])
-            # R(-phi0) t for every phi0: (A, 2)
-            cos_p, sin_p = np.cos(angles), np.sin(angles)
-            shifts = np.column_stack([cos_p * motion[0] + sin_p * motion[1], -sin_p * motion[0] + cos_p * motion[1]])
-            queries = moved[None, :, :] + shifts[:, None, :]  # (A, Q, 2)
-            distances, _ = tree.query(queries.reshape(-1, 2))
-            totals += np.median(distances.reshape(len(angles), -1), axis=1)
-        scores = totals / len(pairs)
+        matched = [
+            _matched_pair(course_log, a, b, motion, bearings, min_range, max_range, max_points)
+            for (a, b), motion in pairs
+        ]
+        matched = [pair for pair in matched if pair is not None]
+        scores = _scores(matched, coarse, len(pairs))
+        fine = np.concatenate(
+            [
+                coarse[best] + np.radians(np.arange(-coarse_degrees, coarse_degrees + step_degrees / 2, step_degrees))
+                for best in np.argsort(scores)[:refined]
+            ]
+        )
+        angles, scores = np.r_[coarse, fine], np.r_[scores, _scores(matched, fine, len(pairs))]
         candidates += [ConventionScore(float(wrap_angle(a)), direction, float(s)) for a, s in zip(angles, scores)]
     ranked = sorted(candidates, key=lambda c: c.score)
     best = ranked[0]
@@ -105,6 +114,33 @@ def detect_beam_convention(
         or abs(wrap_angle(c.first_beam_angle - best.first_beam_angle)) > math.radians(separation)
     )
     return Detection(best, runner_up, candidates, len(pairs))
+
+
+def _matched_pair(course_log, a: int, b: int, motion, bearings, min_range: float, max_range: float, max_points: int):
+    """Scan ``a``'s points in a k-d tree and at most ``max_points`` of scan ``b``'s, rotated by the
+    motion's turn (both for phi0 = 0), with the motion's translation (2,); None when either scan
+    has under 3 points."""
+    q_a = _points(course_log.values[a], bearings, min_range, max_range)
+    q_b = _points(course_log.values[b], bearings, min_range, max_range)
+    q_b = q_b[:: -(-len(q_b) // max_points)] if len(q_b) else q_b
+    if len(q_a) < 3 or len(q_b) < 3:
+        return None
+    dtheta = motion[2]
+    moved = q_b @ np.array([[math.cos(dtheta), math.sin(dtheta)], [-math.sin(dtheta), math.cos(dtheta)]])
+    return cKDTree(q_a), moved, np.asarray(motion[:2])
+
+
+def _scores(matched: list, angles: np.ndarray, pairs: int) -> np.ndarray:
+    """The mean over ``pairs`` scan pairs of the median distance (m) from b's points to a's, for
+    each first-beam angle of ``angles`` (A,) rad: R(-phi0) t shifts b's points (see the module)."""
+    totals = np.zeros(len(angles))
+    cos_p, sin_p = np.cos(angles), np.sin(angles)
+    for tree, moved, (tx, ty) in matched:
+        shifts = np.column_stack([cos_p * tx + sin_p * ty, -sin_p * tx + cos_p * ty])  # (A, 2)
+        queries = moved[None, :, :] + shifts[:, None, :]  # (A, Q, 2)
+        distances, _ = tree.query(queries.reshape(-1, 2))
+        totals += np.median(distances.reshape(len(angles), -1), axis=1)
+    return totals / pairs
 
 
 def _points(ranges: np.ndarray, bearings: np.ndarray, min_range: float, max_range: float) -> np.ndarray:
@@ -186,3 +222,74 @@ def describe(detection: Detection) -> list[str]:
         f"direction {runner_up.direction:+d}: "
         f"{1000 * runner_up.score:.2f} mm (margin x{detection.margin:.2f})",
     ]
+
+
+#: A detected first-beam angle within this many degrees of a quarter turn is taken as that turn:
+#: loggers put beam 0 forward, behind or sideways, and the detection's grid and noise are ~1 deg.
+SNAP_DEGREES = 3.0
+#: Below this margin (runner-up's score over the best's) the detection is inconclusive.
+CONCLUSIVE_MARGIN = 1.2
+
+
+def detected_geometry(
+    run: LoadedRun,
+    min_range: float = 0.0,
+    max_range: float = math.inf,
+    jump_tolerance: float = math.inf,
+    cache: Path | None = None,
+) -> tuple[BeamGeometry, str]:
+    """``run``'s beam geometry with the convention detected from its scans, and a line saying so.
+
+    The mounting offset stays ``run``'s. An inconclusive detection (margin under
+    ``CONCLUSIVE_MARGIN``, or a robot that never moves) keeps ``run``'s geometry. ``cache``: a JSON
+    file that keeps the detection for this log's bytes and these settings, so that a rerun skips it."""
+    settings = {
+        name: value if math.isfinite(value) else None
+        for name, value in (
+            ("mount_x", run.geometry.mount_x),
+            ("min_range", min_range),
+            ("max_range", max_range),
+            ("jump_tolerance", jump_tolerance),
+        )
+    }
+    key = {"log_sha1": hashlib.sha1(run.path.read_bytes()).hexdigest(), "settings": settings}
+    found = _read_cache(cache, key)
+    if found is None:
+        try:
+            detection = detect_beam_convention(run.log, run.geometry.mount_x, min_range, max_range, jump_tolerance)
+            found = {"first_beam_angle": _snapped(detection.best.first_beam_angle), "margin": detection.margin}
+            found["direction"] = detection.best.direction
+        except ValueError as error:
+            found = {"error": str(error)}
+        if cache is not None:
+            cache.write_text(json.dumps({**key, **found}, indent=1) + "\n")
+    if "error" in found or found["margin"] < CONCLUSIVE_MARGIN:
+        reason = found.get("error") or f"margin x{found['margin']:.2f} under x{CONCLUSIVE_MARGIN}"
+        return run.geometry, f"{run.geometry_origin} (beam convention detection inconclusive: {reason})"
+    geometry = dataclasses.replace(
+        run.geometry, first_beam_angle=found["first_beam_angle"], direction=found["direction"]
+    )
+    return geometry, (
+        f"detected from the scans: beam 0 at {math.degrees(geometry.first_beam_angle):.0f} deg, direction "
+        f"{geometry.direction:+d} (margin x{found['margin']:.2f}; override with --first-beam-angle, --beam-direction)"
+    )
+
+
+def _snapped(angle: float) -> float:
+    """``angle`` (rad) as the nearest quarter turn when within ``SNAP_DEGREES`` of it."""
+    quarter = round(angle / (math.pi / 2)) * (math.pi / 2)
+    return float(wrap_angle(quarter)) if abs(angle - quarter) <= math.radians(SNAP_DEGREES) else angle
+
+
+def _read_cache(cache: Path | None, key: dict) -> dict | None:
+    """The cached detection for ``key`` (log hash and settings), or None (no file, another log or
+    other settings, or an unreadable file)."""
+    if cache is None or not cache.is_file():
+        return None
+    try:
+        stored = json.loads(cache.read_text())
+    except (OSError, ValueError):
+        return None
+    if {name: stored.get(name) for name in key} != key:
+        return None
+    return stored

@@ -17,6 +17,7 @@ from mazeslam.config import jsonable
 from mazeslam.evaluation.consistency import POSE_BOUND_95, nees_summary
 from mazeslam.evaluation.metrics import normalized_estimation_error
 from mazeslam.evaluation.scoring import DEAD_RECKONING, error_table
+from mazeslam.evaluation.sharpness import map_sharpness, sharpness_line
 from mazeslam.filters.motion import dead_reckoning
 from mazeslam.grid.filter import GridSlamResult, run_grid_slam
 from mazeslam.grid.map_io import grid_states, write_map
@@ -33,7 +34,8 @@ def run_grid_command(run: LoadedRun, config: SlamConfig, out_dir: Path, progress
     params = config.grid
     if config.scan_matching.enabled:
         params = dataclasses.replace(params, laser_odometry=config.scan_matching)
-    result = run_grid_slam(run.log, run.geometry, run.start_pose, params, progress)
+    moved_by = run.log_without_glitches(config.odometry.jump_tolerance)
+    result = run_grid_slam(moved_by, run.geometry, run.start_pose, params, progress)
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
     paths = {
@@ -44,7 +46,8 @@ def run_grid_command(run: LoadedRun, config: SlamConfig, out_dir: Path, progress
     }
     mean, covariances = result.record_trajectory(run.log, run.start_pose, which="mean")
     sidecars.write_trajectory(paths["trajectory"], run.log.times, mean, covariances)
-    sidecars.write_truth(paths["best_trajectory"], run.log.times, result.record_trajectory(run.log, run.start_pose)[0])
+    best = result.record_trajectory(run.log, run.start_pose)[0]
+    sidecars.write_truth(paths["best_trajectory"], run.log.times, best)
     duration, seconds = run.log.duration, result.total_seconds
     lines = [
         f"{run.path}: {len(run.log)} records, {len(result.scan_records)} scans "
@@ -53,6 +56,9 @@ def run_grid_command(run: LoadedRun, config: SlamConfig, out_dir: Path, progress
         + (f" ({duration / max(seconds, 1e-9):.1f}x real time)" if duration > 0 else "")
         + f", peak map memory {result.peak_map_bytes / 2**20:.0f} MB (tiles shared between particles)",
     ]
+    glitches = run.glitch_line(config.odometry.jump_tolerance)
+    if glitches:
+        lines.append(glitches)
     document = {
         "kind": "grid",
         "source": str(run.path),
@@ -66,6 +72,16 @@ def run_grid_command(run: LoadedRun, config: SlamConfig, out_dir: Path, progress
         "peak_map_bytes": result.peak_map_bytes,
         "occupancy": paths["occupancy"].name,
     }
+    sharpness = {
+        name: map_sharpness(run, poses, config.odometry.jump_tolerance, params.grid.min_range, params.grid.max_range)
+        for name, poses in (("mean path", mean), ("best particle", best))
+    }
+    lines.append(
+        f"Map sharpness (scan returns of {params.grid.min_range:g}-{params.grid.max_range:g} m placed along each path; "
+        "dead reckoning leaves the glitches out):"
+    )
+    lines += ["  " + sharpness_line(name, value) for name, value in sharpness.items()]
+    document["sharpness"] = {name: value.to_dict() for name, value in sharpness.items()}
     if run.truth is not None:
         table, nees = _errors(run, result)
         lines += [

@@ -76,6 +76,22 @@ class LoadedRun:
         distance = np.abs(self.log.increments[:, 0])
         return np.flatnonzero(self.log.is_odometry & (distance > jump_tolerance))
 
+    def glitch_line(self, jump_tolerance: float) -> str | None:
+        """A line listing the glitches (``glitches``) by log line, time and motion; None without any."""
+        glitches = self.glitches(jump_tolerance)
+        if not len(glitches):
+            return None
+        lines = self.log.line_numbers if self.log.line_numbers is not None else glitches + 1
+        return (
+            f"left out {len(glitches)} odometry records travelling more than {jump_tolerance:g} m in one step "
+            "(glitches): "
+            + ", ".join(
+                f"line {lines[index]} (t {self.log.times[index]:.3f} s, dX {self.log.increments[index, 0]:+.4f} m, "
+                f"dTheta {self.log.increments[index, 1]:+.4f} rad)"
+                for index in glitches
+            )
+        )
+
     def log_without_glitches(self, jump_tolerance: float) -> CourseLog:
         """The log with the glitches' odometry (``glitches``) set to no motion, as the filter moves."""
         values = self.log.values.copy()

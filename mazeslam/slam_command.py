@@ -7,19 +7,22 @@ import time
 from pathlib import Path
 
 from mazeslam import sidecars
-from mazeslam.beam_detection import convention_warning
+from mazeslam.beam_detection import convention_warning, detected_geometry
 from mazeslam.beams import SensorOverrides
 from mazeslam.config import with_changes
 from mazeslam.evaluation import slam_report
 from mazeslam.evaluation.consistency import EXPLANATION, OBSERVATION_BOUND_95, POSE_BOUND_95, nis_summary
 from mazeslam.evaluation.map_export import export_map
 from mazeslam.evaluation.scoring import RPE_DISTANCE, score_run
+from mazeslam.evaluation.sharpness import map_sharpness, sharpness_line
 from mazeslam.evaluation.slam_view import scan_source
 from mazeslam.filters.corners import CornerExtractor
 from mazeslam.loaded_run import LoadedRun, load_run
 from mazeslam.slam import MapKind, SlamConfig, SlamResult, load_slam_config, slam_on_run
 from mazeslam.smooth_command import optimum_columns, optimum_line
 
+#: The file in a run's output folder that keeps the beam convention detected for its log.
+BEAM_CACHE = "beam_convention.json"
 #: About how many frames ``--animate`` draws, whatever the log's length.
 ANIMATION_FRAMES = 150
 
@@ -47,6 +50,15 @@ def run_slam_command(
         sensor=(sensor or SensorOverrides()).over(config.sensor),
     )
     run = load_run(log_file, config.sensor)
+    if _detects_convention(run, config):
+        geometry, origin = detected_geometry(
+            run,
+            config.corners.min_range,
+            config.corners.max_range,
+            config.odometry.jump_tolerance,
+            cache=Path(out_dir) / BEAM_CACHE,
+        )
+        run = dataclasses.replace(run, geometry=geometry, geometry_origin=origin)
     if config.map.kind == MapKind.GRID:
         from mazeslam.grid_command import run_grid_command
 
@@ -86,6 +98,15 @@ def run_slam_command(
         "dropped_odometry_lines": [int(line_numbers[r.index]) for r in result.dropped_odometry],
     }
     lines += _uncertainty_lines(nis, score.nees_summary if score is not None else None)
+    if run.log.n_beams:
+        sharpness = {
+            name: map_sharpness(
+                run, poses, config.odometry.jump_tolerance, config.corners.min_range, config.corners.max_range
+            )
+            for name, poses in (("mean path", result.mean_poses), ("best particle", result.best_poses))
+        }
+        lines += _sharpness_lines(sharpness, config)
+        extra["sharpness"] = {name: value.to_dict() for name, value in sharpness.items()}
     if score is not None:
         lines += _score_lines(run, result, score, config.evaluation.match_radius)
         extra["ate"] = score.table.reset_index().to_dict(orient="records")
@@ -166,23 +187,15 @@ def _run_lines(run: LoadedRun, config: SlamConfig, result: SlamResult, matching_
             "intervals without odometry records (matched by correlative search): "
             f"{int((~laser.had_odometry[1:]).sum())}"
         )
-    if not run.geometry_from_sidecar and course_log.is_scan.sum() > 1:
+    if _user_convention(config) and not run.geometry_from_sidecar and course_log.is_scan.sum() > 1:
         warning = convention_warning(
             course_log, run.geometry, config.corners.min_range, config.corners.max_range, config.odometry.jump_tolerance
         )
         if warning:
             lines.append(warning)
-    if result.dropped_odometry:
-        line_numbers = course_log.line_numbers
-        assert line_numbers is not None  # the log was read from a file: each record has its line
-        lines.append(
-            f"left out {len(result.dropped_odometry)} odometry records travelling more than "
-            f"{config.odometry.jump_tolerance:g} m in one step (glitches): "
-            + ", ".join(
-                f"line {line_numbers[r.index]} (t {r.t:.3f} s, dX {r.distance:+.4f} m, dTheta {r.turn:+.4f} rad)"
-                for r in result.dropped_odometry
-            )
-        )
+    glitches = run.glitch_line(config.odometry.jump_tolerance)
+    if glitches:
+        lines.append(glitches)
     checks = slam_report.consistency(result)
     lines.append(
         f"Map consistency: {checks['reobserved']} of {checks['landmarks']} landmarks re-observed "
@@ -191,6 +204,17 @@ def _run_lines(run: LoadedRun, config: SlamConfig, result: SlamResult, matching_
         f"{checks['largest_path_step_m']:.3f} m"
     )
     return lines
+
+
+def _user_convention(config: SlamConfig) -> bool:
+    """The config or the command line gives the beam convention (first-beam angle or direction)."""
+    return config.sensor.first_beam_angle is not None or config.sensor.direction is not None
+
+
+def _detects_convention(run: LoadedRun, config: SlamConfig) -> bool:
+    """A full-circle log with no recorded and no given convention: it is detected from the scans."""
+    full_circle = run.geometry.is_full_circle and run.log.n_beams is not None
+    return full_circle and not run.geometry_from_sidecar and not _user_convention(config) and run.log.is_scan.sum() > 1
 
 
 def _uncertainty_lines(nis: dict, nees: dict | None) -> list[str]:
@@ -208,6 +232,14 @@ def _uncertainty_lines(nis: dict, nees: dict | None) -> list[str]:
     if nees is not None:
         line += f"; pose NEES {described(nees, POSE_BOUND_95, 3)}"
     return [line, "  " + EXPLANATION]
+
+
+def _sharpness_lines(sharpness: dict, config: SlamConfig) -> list[str]:
+    """How sharp the scans' walls are along each path, beside dead reckoning (no truth needed)."""
+    return [
+        f"Map sharpness (scan returns of {config.corners.min_range:g}-{config.corners.max_range:g} m placed along "
+        "each path; dead reckoning leaves the glitches out):"
+    ] + ["  " + sharpness_line(name, value) for name, value in sharpness.items()]
 
 
 def _score_lines(run: LoadedRun, result: SlamResult, score, match_radius: float) -> list[str]:

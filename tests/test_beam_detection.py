@@ -5,11 +5,12 @@ import math
 
 import pytest
 
-from mazeslam import log, simulate
-from mazeslam.beam_detection import detect_beam_convention
+from mazeslam import beam_detection, log, simulate
+from mazeslam.beam_detection import detect_beam_convention, detected_geometry
 from mazeslam.beams import EXERCISE_CONVENTION, BeamGeometry
 from mazeslam.envs.laser import LaserParams
 from mazeslam.envs.simulator import SimulationConfig
+from mazeslam.loaded_run import load_run
 
 
 def angle_gap_degrees(a, b):
@@ -43,3 +44,32 @@ def test_a_log_where_the_robot_never_moves_says_so(tmp_path):
     path.write_text("0.0 0 0 0 -1 -1\n0.1 1 0.5 0.5 0.5 0.5\n0.2 0 0 0 -1 -1\n0.3 1 0.5 0.5 0.5 0.5\n")
     with pytest.raises(ValueError, match="never moves"):
         detect_beam_convention(log.read(path))
+
+
+def test_a_log_without_sidecar_gets_its_convention_detected_once_then_from_the_cache(tmp_path, monkeypatch):
+    laser = LaserParams(geometry=BeamGeometry(first_beam_angle=0.0, direction=1))
+    config = dataclasses.replace(SimulationConfig(), laser=laser)
+    simulated = simulate(tmp_path / "run.log", config=config, seed=3, duration=60, progress=False)
+    bare = tmp_path / "bare.log"  # the log alone: no sidecar says how its beams point
+    bare.write_bytes(simulated.log_path.read_bytes())
+    run = load_run(bare)
+    assert run.geometry == EXERCISE_CONVENTION
+    cache = tmp_path / "beams.json"
+    geometry, origin = detected_geometry(run, cache=cache)
+    assert (geometry.first_beam_angle, geometry.direction) == (0.0, 1)  # snapped to the quarter turn
+    assert origin.startswith("detected from the scans: beam 0 at 0 deg, direction +1")
+    # The second call reads the cache: the detection itself must not run again.
+    monkeypatch.setattr(beam_detection, "detect_beam_convention", lambda *args, **kwargs: pytest.fail("ran again"))
+    assert detected_geometry(run, cache=cache) == (geometry, origin)
+    # Other settings are another question: the cache does not answer it.
+    with pytest.raises(pytest.fail.Exception, match="ran again"):
+        detected_geometry(run, max_range=0.5, cache=cache)
+
+
+def test_an_inconclusive_detection_keeps_the_logs_geometry(tmp_path):
+    path = tmp_path / "still.log"
+    path.write_text("0.0 0 0 0 -1 -1\n0.1 1 0.5 0.5 0.5 0.5\n0.2 0 0 0 -1 -1\n0.3 1 0.5 0.5 0.5 0.5\n")
+    run = load_run(path)
+    geometry, origin = detected_geometry(run)
+    assert geometry == run.geometry
+    assert "detection inconclusive" in origin and "never moves" in origin

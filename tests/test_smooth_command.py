@@ -109,7 +109,11 @@ def test_run_dir_goes_with_from_run_only(default_run, args):
 
 
 def test_from_run_on_the_exercise_robot_log(course_log_path, tmp_path):
-    options = ["--config", PROJECT_ROOT / "configs" / "course.toml", "--first-beam-angle", 0]
+    corner_config = tmp_path / "course_landmarks.toml"  # the smoother reads a corner map: not the grid filter's
+    corner_config.write_text(
+        (PROJECT_ROOT / "configs" / "course.toml").read_text().replace('\nkind = "grid"', '\nkind = "landmarks"')
+    )
+    options = ["--config", corner_config, "--first-beam-angle", 0]
     assert invoke("slam", course_log_path, *options, "--out", tmp_path / "slam", "--quiet").exit_code == 0
     result = invoke(
         "smooth",

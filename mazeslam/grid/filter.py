@@ -164,7 +164,8 @@ class GridSlam:
         if needed. Returns the share of particles whose match was accepted, the effective sample
         size before resampling and the resampling's indexes (None without resampling)."""
         rays = scan_rays(ranges, self.sensor.bearings, self.sensor.mount, self.params.grid)
-        points = match_points(ranges, self.sensor.bearings, self.sensor.mount, self.params.match)
+        trusted = np.where(ranges >= self.params.grid.min_range, ranges, 0.0)
+        points = match_points(trusted, self.sensor.bearings, self.sensor.mount, self.params.match)
         if self.params.map_corrected_motion:
             motion = self._map_corrected_motion(motion, points)
         covariance = self.params.motion_covariance(motion)

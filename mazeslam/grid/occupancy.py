@@ -35,6 +35,8 @@ class GridParams:
         hit: log-odds added to the cell a beam ends in.
         miss: log-odds added to a cell a beam crosses (negative).
         clamp: log-odds stay within [-clamp, clamp], so that a map can change its mind.
+        min_range: returns nearer than this are left out as no return, m (a sensor's untrusted
+            near span: the course robot's camera trusts 0.05-0.4 m).
         max_range: beams update the map up to this range, m; a longer beam (or a max-range return)
             clears the cells up to it and marks nothing occupied.
         trace_step: distance between the samples along a beam that mark cells free, in cells.
@@ -45,11 +47,13 @@ class GridParams:
     hit: float = 0.85
     miss: float = -0.4
     clamp: float = 5.0
+    min_range: float = 0.0
     max_range: float = 20.0
     trace_step: float = 0.8
 
     def __post_init__(self):
         require(self.resolution > 0 and self.max_range > 0, "resolution and max_range must be positive (m)")
+        require(0 <= self.min_range < self.max_range, "need 0 <= min_range < max_range (m)")
         require(self.tile_size >= 4, "tile_size must be at least 4 cells")
         require(self.hit > 0 > self.miss and self.clamp > 0, "need hit > 0 > miss and clamp > 0 (log-odds)")
         require(0 < self.trace_step <= 1, "trace_step must be in (0, 1] cells")
@@ -166,7 +170,7 @@ class ScanRays:
 def scan_rays(ranges: np.ndarray, bearings: np.ndarray, mount: np.ndarray, params: GridParams) -> ScanRays:
     """The samples of a scan: ``ranges`` (N,) m (0 = no return, left out), ``bearings`` (N,) rad in
     the robot frame, the sensor at ``mount`` (2,) in the robot frame."""
-    valid = ranges > 0
+    valid = (ranges > 0) & (ranges >= params.min_range)
     ranges, bearings = ranges[valid], bearings[valid]
     hit = ranges <= params.max_range
     length = np.minimum(ranges, params.max_range) - np.where(hit, 0.5 * params.resolution, 0.0)

@@ -1,0 +1,110 @@
+"""Map sharpness: how smeared a log's walls are when its scans are placed along a path.
+
+The measure for real logs without truth (issue 16). Every scan's returns with range in
+[``min_range``, ``max_range``] are placed at the estimated pose of their record (the log's beam
+geometry and mounting offset) and the distinct occupied ``cell`` x ``cell`` cells are counted:
+fewer cells mean sharper walls. Dead reckoning is the same count along the integrated odometry,
+with the glitch records (more than ``jump_tolerance`` metres in one step, the exercise's TOL_JMP)
+left out as the filter leaves them out.
+
+A path that shrinks also looks sharper, so the path's extent (the diagonal of its bounding box)
+is reported beside the count: a fair comparison keeps it near dead reckoning's.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import asdict, dataclass
+
+import numpy as np
+
+from mazeslam import log
+from mazeslam.beams import BeamGeometry
+from mazeslam.evaluation.slam_report import scan_points_world
+from mazeslam.filters.motion import dead_reckoning
+from mazeslam.loaded_run import LoadedRun
+
+#: The issue's definition: returns of 0.05-0.4 m (the course camera's trusted span), 1 cm cells.
+TRUSTED_SPAN = (0.05, 0.4)
+CELL = 0.01
+
+
+def occupied_cells(
+    course_log: log.CourseLog,
+    poses: np.ndarray,
+    geometry: BeamGeometry,
+    min_range: float = TRUSTED_SPAN[0],
+    max_range: float = TRUSTED_SPAN[1],
+    cell: float = CELL,
+) -> int:
+    """How many distinct ``cell``-sized squares (m) the scans' returns occupy when placed by
+    ``poses`` (R, 3), one world pose per record of ``course_log``."""
+    points = scan_points_world(course_log, poses, geometry, min_range, max_range)
+    return len(np.unique(np.floor(points / cell).astype(np.int64), axis=0))
+
+
+def path_extent(poses: np.ndarray) -> float:
+    """The diagonal of the bounding box of the positions of ``poses`` (R, 3), metres."""
+    if not len(poses):
+        return 0.0
+    span = poses[:, :2].max(axis=0) - poses[:, :2].min(axis=0)
+    return float(math.hypot(*span))
+
+
+@dataclass(frozen=True)
+class Sharpness:
+    """A path's map sharpness beside dead reckoning's.
+
+    Attributes:
+        cells, dead_reckoning_cells: occupied 1 cm cells along the path and along dead reckoning.
+        extent_m, dead_reckoning_extent_m: the paths' bounding-box diagonals, metres.
+    """
+
+    cells: int
+    dead_reckoning_cells: int
+    extent_m: float
+    dead_reckoning_extent_m: float
+
+    @property
+    def ratio(self) -> float:
+        """cells / dead reckoning's cells: below 1 is sharper than the odometry."""
+        return self.cells / max(self.dead_reckoning_cells, 1)
+
+    @property
+    def extent_ratio(self) -> float:
+        """The path's extent over dead reckoning's (a shrunken path looks sharper: keep near 1)."""
+        return self.extent_m / max(self.dead_reckoning_extent_m, 1e-12)
+
+    def to_dict(self) -> dict:
+        return {**asdict(self), "ratio": self.ratio, "extent_ratio": self.extent_ratio}
+
+
+def dead_reckoning_without_glitches(run: LoadedRun, jump_tolerance: float) -> np.ndarray:
+    """(R, 3) the odometry integrated from the run's start, the glitch records left out."""
+    return dead_reckoning(run.log_without_glitches(jump_tolerance), run.start_pose)
+
+
+def map_sharpness(
+    run: LoadedRun,
+    poses: np.ndarray,
+    jump_tolerance: float = math.inf,
+    min_range: float = TRUSTED_SPAN[0],
+    max_range: float = TRUSTED_SPAN[1],
+) -> Sharpness:
+    """Sharpness of ``run``'s scans placed by ``poses`` (R, 3) and by dead reckoning."""
+    reckoned = dead_reckoning_without_glitches(run, jump_tolerance)
+    return Sharpness(
+        occupied_cells(run.log, poses, run.geometry, min_range, max_range),
+        occupied_cells(run.log, reckoned, run.geometry, min_range, max_range),
+        path_extent(poses),
+        path_extent(reckoned),
+    )
+
+
+def sharpness_line(name: str, sharpness: Sharpness) -> str:
+    """One line for the terminal: the counts, their ratio and the extents'."""
+    return (
+        f"{name}: {sharpness.cells} occupied 1 cm cells against dead reckoning's "
+        f"{sharpness.dead_reckoning_cells} (x{sharpness.ratio:.2f}; fewer = sharper walls), path extent "
+        f"x{sharpness.extent_ratio:.2f} of dead reckoning's"
+    )
