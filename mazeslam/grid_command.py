@@ -34,7 +34,7 @@ def run_grid_command(run: LoadedRun, config: SlamConfig, out_dir: Path, progress
     params = config.grid
     if config.scan_matching.enabled:
         params = dataclasses.replace(params, laser_odometry=config.scan_matching)
-    moved_by = run.log_without_glitches(config.odometry.jump_tolerance)
+    moved_by = run.log_with_glitch_pairs_summed(config.odometry.jump_tolerance)
     result = run_grid_slam(moved_by, run.geometry, run.start_pose, params, progress)
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)

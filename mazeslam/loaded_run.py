@@ -92,6 +92,24 @@ class LoadedRun:
             )
         )
 
+    def log_with_glitch_pairs_summed(self, jump_tolerance: float) -> CourseLog:
+        """The log with each glitch zeroed, except that two glitches in consecutive odometry
+        records whose sum travels within ``jump_tolerance`` become their sum (on the second): the
+        course robot's wheel counters wrap and unwrap one record later, so such a pair's sum is the
+        real motion (log1's lines 79-80 and 196-197), while a lone jump is not motion."""
+        values = self.log.values.copy()
+        glitches = set(self.glitches(jump_tolerance).tolist())
+        odometry = np.flatnonzero(self.log.is_odometry)
+        paired: set[int] = set()
+        for first, second in zip(odometry[:-1], odometry[1:]):
+            if first in glitches and second in glitches and first not in paired:
+                summed = values[first, :2] + values[second, :2]
+                if abs(summed[0]) <= jump_tolerance:
+                    values[second, :2], values[first, :2] = summed, 0.0
+                    paired.update((first, second))
+        values[sorted(glitches - paired), :2] = 0.0
+        return dataclasses.replace(self.log, values=values)
+
     def log_without_glitches(self, jump_tolerance: float) -> CourseLog:
         """The log with the glitches' odometry (``glitches``) set to no motion, as the filter moves."""
         values = self.log.values.copy()

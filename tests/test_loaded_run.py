@@ -27,3 +27,20 @@ def test_a_bare_log_starts_at_the_origin_with_the_exercise_convention_and_overri
     assert "overridden by first_beam_angle" in run.geometry_origin
     np.testing.assert_array_equal(run.glitches(jump_tolerance=0.1), [2])  # the 0.5 m odometry step
     assert isinstance(run.log, log.CourseLog)
+
+
+def test_a_glitch_pair_becomes_its_sum_and_a_lone_glitch_no_motion(tmp_path):
+    # As log1: a lone -0.119 m jump (a wheel counter off once), then a pair +0.0645 / -0.0575 m
+    # (off and back one record later) whose sum, 7 mm, is the real motion.
+    lines = ["0.2 0 0.005 0.01", "0.4 0 -0.119 -0.003", "0.6 0 0.006 0", "0.8 1 0.3 0.3"]
+    lines += ["1.0 0 0.0645 0.8491", "1.2 0 -0.0575 -0.8491", "1.4 0 0.004 0"]
+    path = tmp_path / "glitches.log"
+    path.write_text("\n".join(lines) + "\n")
+    run = load_run(path)
+    assert run.glitches(0.02).tolist() == [1, 4, 5]
+    summed = run.log_with_glitch_pairs_summed(0.02).increments
+    np.testing.assert_allclose(summed[:, 0], [0.005, 0.0, 0.006, 0.0, 0.0, 0.007, 0.004], atol=1e-12)
+    np.testing.assert_allclose(summed[:, 1], [0.01, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0], atol=1e-12)
+    dropped = run.log_without_glitches(0.02).increments
+    np.testing.assert_allclose(dropped[:, 0], [0.005, 0.0, 0.006, 0.0, 0.0, 0.0, 0.004], atol=1e-12)
+    assert "line 2 (t 0.400 s, dX -0.1190 m" in run.glitch_line(0.02)
