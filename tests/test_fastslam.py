@@ -4,7 +4,7 @@ import math
 import numpy as np
 import pytest
 
-from mazeslam.filters.fastslam import FastSLAM, FastSLAMParams
+from mazeslam.filters.fastslam import Candidates, FastSLAM, FastSLAMParams
 
 EXACT = FastSLAMParams(
     NPARTICLES=1,
@@ -51,18 +51,27 @@ def test_repeated_observations_shrink_the_landmark_like_an_average():
     np.testing.assert_allclose(np.linalg.det(covariances[0]), np.linalg.det(first.landmarks()[1][0]) / 50**2, rtol=0.2)
 
 
-def test_jacobian_matches_finite_differences():
-    slam = FastSLAM(dataclasses.replace(EXACT, NPARTICLES=3), start_pose=(0.1, -0.2, 0.7))
-    slam.update(np.array([[0.4, 0.3], [0.6, -1.0]]))
-    rho, bearing, (a, b, c, d) = slam._predicted(2)
-    jacobian = np.stack([np.stack([a, b], -1), np.stack([c, d], -1)], -2)  # (P, m, 2, 2)
-    step = 1e-7
-    for axis in range(2):
-        slam.means[..., axis] += step
-        moved_rho, moved_bearing, _ = slam._predicted(2)
-        slam.means[..., axis] -= step
-        np.testing.assert_allclose((moved_rho - rho) / step, jacobian[..., 0, axis], atol=1e-5)
-        np.testing.assert_allclose((moved_bearing - bearing) / step, jacobian[..., 1, axis], atol=1e-5)
+@pytest.mark.parametrize("version", [1, 2])
+def test_landmarks_left_out_of_the_model_could_not_have_mattered(version):
+    """The spatial index keeps every landmark that is within the new-landmark gate of an observation."""
+    rng = np.random.default_rng(version)
+    params = FastSLAMParams(NPARTICLES=50, version=version, seed=version)
+    slam = FastSLAM(params, capacity=64)
+    slam.exists[:, :60] = True
+    slam.means[:, :60] = rng.uniform(-3, 3, (60, 2)) + rng.normal(0, 0.02, (50, 60, 2))  # particles' maps agree
+    slam.poses += rng.normal(0, [0.03, 0.03, 0.1], (50, 3))
+    slam.covariances[:, :60] = np.eye(2) * rng.uniform(1e-5, 5e-3, (50, 60, 1, 1))
+    slam.pose_covariances[:] = [[1e-3, 2e-4, 3e-4], [2e-4, 2e-3, -1e-4], [3e-4, -1e-4, 1e-2]]
+    slam.reindex()
+    observations = np.column_stack([rng.uniform(0.05, 0.8, 6), rng.uniform(-math.pi, math.pi, 6)])
+    noise = params.observation_noise(np.tile(np.diag([1e-4, 1e-2]), (6, 1, 1)), 6)
+    culled = slam._candidates(observations, noise, 60)
+    every_slot = Candidates(np.arange(60), slam.exists[:, :60], np.ones((6, 60), dtype=bool))
+    everything = slam._model(observations, noise, every_slot, version == 2)
+    left_out = np.ones((6, 60), dtype=bool)  # observation-slot pairs not modelled
+    left_out[:, culled.slots] = ~culled.near
+    assert left_out.mean() > 0.6  # the index does cull
+    assert everything.distance2[:, left_out].min() >= params.new_landmark_gate
 
 
 def test_association_is_by_mahalanobis_distance_not_by_metres():
@@ -192,6 +201,7 @@ def test_fastslam2_draws_poses_from_the_kalman_posterior_of_motion_and_observati
     slam.means[:, 0] = (0.3, 0.0)
     slam.covariances[:, 0] = np.eye(2) * 1e-6
     slam.seen[:, 0] = 5
+    slam.reindex()
     slam.pose_covariances[:, 0, 0] = 0.05**2
     slam.update(np.array([[0.27, 0.0]]))
     prior, measured = 0.05**2, 0.01**2 + 1e-6

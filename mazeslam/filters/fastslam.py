@@ -35,14 +35,19 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from mazeslam.config import require
-from mazeslam.filters import ekf
+from mazeslam.filters import ekf, resampling
 from mazeslam.filters.association import associate_greedy, associate_known
 from mazeslam.filters.motion import OdometryNoise
 from mazeslam.filters.proposals import PROPOSALS
-from mazeslam.filters.resampling import effective_sample_size, normalized_weights, systematic_resample
+from mazeslam.filters.resampling import effective_sample_size, normalized_weights
 from mazeslam.geometry import wrap_angle
 
 LOG_TWO_PI = math.log(2 * math.pi)
+#: The spatial index's reach is widened by this factor against rounding (``FastSLAM._reach``).
+CULL_SAFETY = 1.01
+#: Metres: after resampling, the index boxes of slots wider than this (a slot that held landmarks
+#: far apart in different particles) are rebuilt from the particles drawn (``FastSLAM.reindex``).
+REINDEX_WIDTH = 0.1
 
 
 class Association(enum.StrEnum):
@@ -190,30 +195,49 @@ class UpdateReport:
 
 
 @dataclass
-class MeasurementModel:
-    """The measurement model of the first m landmark slots at the particles' current poses,
-    against one scan's K observations (each entry of a 2x2 matrix is its own array, for speed).
+class Candidates:
+    """The landmark slots that can matter to one scan: those near its observations, found before
+    any Mahalanobis work (``FastSLAM._candidates``), so the cost per observation does not grow
+    with the map.
 
     Attributes:
-        rho, bearing: (P, m) predicted range (m) and bearing (rad) of every slot.
-        h: the landmark Jacobian d(rho, bearing)/d(landmark) as entries (a, b, c, d), each (P, m).
-        nu: the innovations (range, bearing) of every observation-slot pair, each (P, K, m).
-        det, distance2: determinant and squared Mahalanobis distance of the innovation under
-            S = H Sigma H^T + R (+ Gx Sigma_x Gx^T with the pose's uncertainty), each (P, K, m);
-            distance2 is inf for empty slots.
+        slots: (C,) the slots, ascending (the same for every particle).
+        valid: (P, C) the particle holds a landmark in that slot.
+        near: (K, C) the observation-slot pairs that can matter; the others are beyond the
+            new-landmark gate in every particle.
     """
 
-    rho: np.ndarray
-    bearing: np.ndarray
-    h: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]
-    nu: tuple[np.ndarray, np.ndarray]
+    slots: np.ndarray
+    valid: np.ndarray
+    near: np.ndarray
+
+    def slots_of(self, columns: np.ndarray) -> np.ndarray:
+        """Slots (P, K) of candidate ``columns`` (P, K) (-1 stays -1)."""
+        if not len(self.slots):
+            return np.full(columns.shape, -1)
+        return np.where(columns >= 0, self.slots[np.maximum(columns, 0)], -1)
+
+    def columns_of(self, slots: np.ndarray) -> np.ndarray:
+        """Candidate columns (P, K) of ``slots`` (P, K), which must be candidates (-1 stays -1)."""
+        return np.where(slots >= 0, np.searchsorted(self.slots, slots), -1)
+
+
+@dataclass
+class MeasurementModel:
+    """The measurement model of the candidate landmarks at the particles' current poses, against
+    one scan's K observations.
+
+    Attributes:
+        candidates: the landmark slots modelled, C of them.
+        det, distance2: determinant and squared Mahalanobis distance of the innovation under
+            S = H Sigma H^T + R (+ Gx Sigma_x Gx^T with the pose's uncertainty), each (P, K, C);
+            computed for the pairs ``candidates.near`` only: elsewhere distance2 is inf (as for
+            slots the particle does not hold) and det NaN.
+    """
+
+    candidates: Candidates
     det: np.ndarray
     distance2: np.ndarray
-
-    def jacobians(self, rows: np.ndarray, slots: np.ndarray) -> np.ndarray:
-        """H (n, 2, 2) of the particle-slot pairs ``rows``, ``slots`` (n,) each."""
-        a, b, c, d = (entry[rows, slots] for entry in self.h)
-        return np.stack([np.stack([a, b], -1), np.stack([c, d], -1)], -2)
 
 
 class FastSLAM:
@@ -240,6 +264,7 @@ class FastSLAM:
         self.facings = np.full((p, capacity), np.nan)
         self.pose_covariances = np.zeros((p, 3, 3))
         self.resamplings = 0
+        self.reindex()
 
     # -- motion -----------------------------------------------------------------------------
     def predict(self, distance: float, turn: float) -> None:
@@ -269,15 +294,141 @@ class FastSLAM:
         used = np.flatnonzero(self.exists.any(axis=0))
         return int(used[-1]) + 1 if len(used) else 0
 
-    def _predicted(self, m: int):
-        """For the first ``m`` slots: predicted range and bearing (P, m) each, and the Jacobian
-        H = d(range, bearing)/d(landmark) as its four entries (P, m) each: [[a, b], [c, d]]."""
-        delta = self.means[:, :m] - self.poses[:, None, :2]
+    def _candidates(self, observations: np.ndarray, noise: np.ndarray, m: int, assigned=None) -> Candidates:
+        """The slots among the first ``m`` that can be associated with any of the scan's
+        ``observations`` (K, 2) of noise ``noise`` (K, 2, 2), plus the ``assigned`` (P, K) slots of
+        known association.
+
+        A spatial index over slots: every slot's landmarks, in whichever particles hold one, lie in
+        its box (``reindex``); every particle's k-th observation lies, in the world frame, in the
+        box of that observation over the particles. A slot whose box is at least ``_reach``
+        metres from every observation's box is left out: it could neither be associated nor make
+        an observation ambiguous in any particle. The cost is a few operations per slot and
+        observation; the Mahalanobis work is then done on the C slots near the observations
+        (C stays flat as the map grows).
+        """
+        p = len(self.poses)
+        if m == 0 or not len(observations):
+            return Candidates(
+                np.zeros(0, dtype=np.int64), np.zeros((p, 0), dtype=bool), np.zeros((len(observations), 0), dtype=bool)
+            )
+        angle = self.poses[:, None, 2] + observations[None, :, 1]  # (P, K)
+        x = self.poses[:, None, 0] + observations[None, :, 0] * np.cos(angle)
+        y = self.poses[:, None, 1] + observations[None, :, 0] * np.sin(angle)
+        box = self._boxes[:m, :, None]  # (m, 4, 1): x min, y min, x max, y max
+        gap_x = np.maximum(np.maximum(box[:, 0] - x.max(axis=0), x.min(axis=0) - box[:, 2]), 0.0)  # (m, K)
+        gap_y = np.maximum(np.maximum(box[:, 1] - y.max(axis=0), y.min(axis=0) - box[:, 3]), 0.0)
+        near = gap_x * gap_x + gap_y * gap_y < self._reach(observations, noise, m) ** 2  # (m, K)
+        if assigned is not None:
+            rows, ks = np.nonzero(assigned >= 0)
+            near[assigned[rows, ks], ks] = True
+        columns = np.flatnonzero(near.any(axis=1))
+        return Candidates(columns, self.exists[:, columns], near[columns].T)
+
+    def _reach(self, observations: np.ndarray, noise: np.ndarray, m: int) -> np.ndarray:
+        """(m, K) metres: a landmark of slot j farther than this from where observation k puts it
+        is beyond the new-landmark gate G (squared Mahalanobis) in every particle.
+
+        With innovation nu = (r - rho, bearing difference) of a landmark at range rho and an
+        observation at range r, |landmark - observed point|^2 <= nu_0^2 + r rho nu_1^2, and
+        nu^T S^-1 nu < G implies nu_i^2 < G S_ii. S_00 <= lam + R_00 and
+        S_11 <= lam / rho^2 + 2 c / rho + v + R_11, lam bounding the eigenvalues of the landmark's
+        plus the pose's position covariance, c the pose's position-heading covariance, v its
+        heading variance (FastSLAM 2.0). Where rho may be near 0 the plain bound r + rho is used.
+        """
+        gate = self.params.new_landmark_gate
+        pose = self.pose_covariances
+        lam = self._spreads[:m, None] + (pose[:, 0, 0] + pose[:, 1, 1]).max()  # (m, 1)
+        cross, heading = np.hypot(pose[:, 0, 2], pose[:, 1, 2]).max(), pose[:, 2, 2].max()
+        r, r00, r11 = observations[:, 0], noise[:, 0, 0], noise[:, 1, 1]  # (K,)
+        delta = np.sqrt(gate * (lam + r00))  # |nu_0| bound, (m, K)
+        farthest = r + delta  # rho bound
+        plain = r + farthest
+        ratio = r / np.maximum(r - delta, 1e-12)  # r / rho bound where r - delta > 0
+        bound = np.sqrt(gate * (lam * (1 + ratio) + r00 + 2 * r * cross + r * farthest * (heading + r11)))
+        return CULL_SAFETY * np.where(r >= 2 * delta, np.minimum(bound, plain), plain)
+
+    def reindex(self, slots: np.ndarray | slice = slice(None)) -> None:
+        """Rebuild the slots' spatial index from the landmark arrays (all slots, or ``slots``):
+        each slot's box (x min, y min, x max, y max, metres) around its landmarks in every
+        particle, and the largest trace of their covariances (m^2). The filter keeps it up to date
+        (updates widen it, resampling rebuilds the boxes a reused slot made wide); call this after
+        writing ``means``, ``covariances`` or ``exists`` directly."""
+        if isinstance(slots, slice):
+            self._boxes = np.empty((self.exists.shape[1], 4))
+            self._spreads = np.empty(self.exists.shape[1])
+        exists, means, covariances = self.exists[:, slots], self.means[:, slots], self.covariances[:, slots]
+        x, y = means[..., 0], means[..., 1]
+        self._boxes[slots, 0] = np.where(exists, x, np.inf).min(axis=0)
+        self._boxes[slots, 1] = np.where(exists, y, np.inf).min(axis=0)
+        self._boxes[slots, 2] = np.where(exists, x, -np.inf).max(axis=0)
+        self._boxes[slots, 3] = np.where(exists, y, -np.inf).max(axis=0)
+        self._spreads[slots] = np.where(exists, covariances[..., 0, 0] + covariances[..., 1, 1], 0.0).max(axis=0)
+
+    def _widen_index(self, rows: np.ndarray, slots: np.ndarray) -> None:
+        """Widen the index (``reindex``) to the landmarks ``rows``, ``slots`` (n,) just written
+        (only those outside their slot's box or above its spread: a landmark update shrinks the
+        covariance and moves the mean a little)."""
+        means = self.means[rows, slots]
+        covariances = self.covariances[rows, slots]
+        spread = covariances[:, 0, 0] + covariances[:, 1, 1]
+        box = self._boxes[slots]
+        out = (
+            (means[:, 0] < box[:, 0])
+            | (means[:, 1] < box[:, 1])
+            | (means[:, 0] > box[:, 2])
+            | (means[:, 1] > box[:, 3])
+            | (spread > self._spreads[slots])
+        )
+        slots, means, spread = slots[out], means[out], spread[out]
+        for column, reduce, values in (
+            (0, np.minimum, means[:, 0]),
+            (1, np.minimum, means[:, 1]),
+            (2, np.maximum, means[:, 0]),
+            (3, np.maximum, means[:, 1]),
+        ):
+            reduce.at(self._boxes[:, column], slots, values)
+        np.maximum.at(self._spreads, slots, spread)
+
+    def _model(
+        self, observations: np.ndarray, noise: np.ndarray, candidates: Candidates, with_pose_uncertainty: bool
+    ) -> MeasurementModel:
+        """The measurement model of the ``candidates`` at the current poses (see
+        ``MeasurementModel``); ``with_pose_uncertainty`` adds the motion covariance not yet drawn.
+        Written entry by entry over (P, K, C) arrays: the 2x2 matrices never become arrays of
+        their own."""
+        slots = candidates.slots
+        delta = self.means[:, slots] - self.poses[:, None, :2]  # (P, C, 2)
         dx, dy = delta[..., 0], delta[..., 1]
         q = np.maximum(dx * dx + dy * dy, 1e-12)
         rho = np.sqrt(q)
-        bearing = wrap_angle(np.arctan2(dy, dx) - self.poses[:, None, 2])
-        return rho, bearing, (dx / rho, dy / rho, -dy / q, dx / q)
+        a, b, c, d = dx / rho, dy / rho, -dy / q, dx / q  # H = d(range, bearing)/d(landmark)
+        sigma = self.covariances[:, slots]
+        s00, s01, s11 = sigma[..., 0, 0], sigma[..., 0, 1], sigma[..., 1, 1]
+        if with_pose_uncertainty:  # Gx = -[H | (0, 1)^T]: the pose's position adds to the landmark's covariance
+            pose = self.pose_covariances[:, None]  # (P, 1, 3, 3)
+            s00, s01, s11 = s00 + pose[..., 0, 0], s01 + pose[..., 0, 1], s11 + pose[..., 1, 1]
+        t00 = a * a * s00 + 2 * a * b * s01 + b * b * s11
+        t01 = a * c * s00 + (a * d + b * c) * s01 + b * d * s11
+        t11 = c * c * s00 + 2 * c * d * s01 + d * d * s11
+        if with_pose_uncertainty:
+            t01 = t01 + a * pose[..., 0, 2] + b * pose[..., 1, 2]
+            t11 = t11 + 2 * (c * pose[..., 0, 2] + d * pose[..., 1, 2]) + pose[..., 2, 2]
+        angle = np.arctan2(dy, dx) - self.poses[:, None, 2]  # predicted bearing, unwrapped
+        # Only the observation-slot pairs near each other, each (P, Q).
+        ks, columns = np.nonzero(candidates.near)
+        t00 = t00[:, columns] + noise[ks, 0, 0]
+        t01 = t01[:, columns] + noise[ks, 0, 1]
+        t11 = t11[:, columns] + noise[ks, 1, 1]
+        pair_det = t00 * t11 - t01 * t01
+        nu0 = observations[ks, 0] - rho[:, columns]
+        nu1 = ekf.wrap(observations[ks, 1] - angle[:, columns])
+        pair_distance2 = (t11 * nu0 * nu0 - 2 * t01 * nu0 * nu1 + t00 * nu1 * nu1) / pair_det
+        shape = (len(self.poses), len(observations), len(slots))
+        distance2, det = np.full(shape, np.inf), np.full(shape, np.nan)
+        distance2[:, ks, columns] = np.where(candidates.valid[:, columns], pair_distance2, np.inf)
+        det[:, ks, columns] = pair_det
+        return MeasurementModel(candidates, det, distance2)
 
     # -- update -------------------------------------------------------------------------------
     def update(
@@ -295,9 +446,10 @@ class FastSLAM:
             ids: (K,) known landmark identities (``association="known"``; -1: none, the observation
                 is left out and counted as ambiguous), else None.
             facings: (K,) the directions the observed landmarks face (rad, robot frame), or None.
-        Steps: 1. associate (with the pose's uncertainty for FastSLAM 2.0); 2. draw the poses
-        (FastSLAM 2.0); 3. update matched landmarks, start new ones and weigh the particles;
-        4. drop tentative landmarks that were missed; 5. resample when the weights degenerate.
+        Steps: 1. associate (with the pose's uncertainty for FastSLAM 2.0) among the landmarks
+        within reach; 2. draw the poses (FastSLAM 2.0); 3. update matched landmarks, start new
+        ones and weigh the particles; 4. drop tentative landmarks that were missed; 5. resample
+        when the weights degenerate.
         """
         observations = np.asarray(observations, dtype=float).reshape(-1, 2)
         report = UpdateReport(observations=len(observations))
@@ -308,44 +460,37 @@ class FastSLAM:
         while count and (~self.exists).sum(axis=1).min() < count:  # room for every observation to start a landmark
             self._grow()
         noise = self.params.inflation * self.params.observation_noise(covariances, count)
-        m = self._used_slots()
-        # 1. Association, under the model the weights use.
-        prior = self._model(observations, noise, m, self.proposal.carries_pose_uncertainty)
         relative_facings = None if facings is None else np.asarray(facings, dtype=float)
+        # 1. Association among the candidates, under the model the weights use.
+        m = self._used_slots()
+        assigned = None
         if known and count:
             assigned = associate_known(np.asarray(ids), self.ids[:, :m], self.exists[:, :m])
-        else:
-            if relative_facings is not None and m and self.params.facing_gate < 180:
-                self._gate_by_facing(prior.distance2, relative_facings, m)
-            assigned = associate_greedy(prior.distance2, self.params.gate)
+        model = self._model(
+            observations,
+            noise,
+            self._candidates(observations, noise, m, assigned),
+            self.proposal.carries_pose_uncertainty,
+        )
+        if assigned is None:
+            if relative_facings is not None and self.params.facing_gate < 180:
+                self._gate_by_facing(model, relative_facings)
+            assigned = model.candidates.slots_of(associate_greedy(model.distance2, self.params.gate))
         # 2. The proposal's draw; the landmarks are then corrected at the drawn poses.
-        model = prior
         self.poses, self.pose_covariances, joint = self.proposal.draw(
             self.poses, self.pose_covariances, assigned, observations, self.means, self.covariances, noise, self.rng
         )
-        if self.proposal.carries_pose_uncertainty:
-            model = self._model(observations, noise, m, with_pose_uncertainty=False)
-        # 3. Landmarks and weights, observation by observation.
-        likelihood = joint if joint is not None else _associated_terms(prior, assigned)
+        likelihood = joint if joint is not None else _associated_terms(model, assigned)
         report.nis = _normalised_innovations(likelihood[0], assigned, self.weights())
-        matched_now = np.zeros_like(self.exists)
-        for k in range(count):
-            self._apply(
-                k,
-                assigned[:, k],
-                model,
-                prior.distance2,
-                likelihood,
-                observations[k],
-                noise[k],
-                None if ids is None else ids[k],
-                None if relative_facings is None else relative_facings[k],
-                matched_now,
-                report,
-            )
-        # 4. Tentative landmarks predicted in view but not seen.
+        # 3. Landmarks and weights.
         if count:
-            self._manage_landmarks(model.rho, matched_now, report)
+            matched_now = np.zeros_like(self.exists)
+            new = self._new_observations(assigned, model, ids, report)
+            self._weigh(assigned, new, likelihood, noise)
+            self._correct_landmarks(assigned, observations, noise, matched_now, report)
+            self._add_landmarks(new, observations, noise, ids, relative_facings, matched_now)
+            # 4. Tentative landmarks predicted in view but not seen.
+            self._manage_landmarks(matched_now, report)
         # 5. Selective resampling.
         report.effective_sample_size = self.effective_sample_size()
         if report.effective_sample_size < self.params.resample_threshold * self.params.NPARTICLES:
@@ -353,99 +498,92 @@ class FastSLAM:
             report.resampled = True
         return report
 
-    def _model(
-        self, observations: np.ndarray, noise: np.ndarray, m: int, with_pose_uncertainty: bool
-    ) -> MeasurementModel:
-        """The measurement model of the first ``m`` slots at the current poses (see
-        ``MeasurementModel``); ``with_pose_uncertainty`` adds the motion covariance not yet drawn."""
-        rho, bearing, h = self._predicted(m)
-        a, b, c, d = h
-        sigma = self.covariances[:, :m]
-        s00, s01, s11 = sigma[..., 0, 0], sigma[..., 0, 1], sigma[..., 1, 1]
-        t00 = a * a * s00 + 2 * a * b * s01 + b * b * s11
-        t01 = a * c * s00 + (a * d + b * c) * s01 + b * d * s11
-        t11 = c * c * s00 + 2 * c * d * s01 + d * d * s11
-        if with_pose_uncertainty:
-            gx = np.stack([np.stack([-a, -b, np.zeros_like(a)], -1), np.stack([-c, -d, -np.ones_like(a)], -1)], -2)
-            pose_term = gx @ self.pose_covariances[:, None] @ np.swapaxes(gx, -1, -2)  # (P, m, 2, 2)
-            t00, t01, t11 = t00 + pose_term[..., 0, 0], t01 + pose_term[..., 0, 1], t11 + pose_term[..., 1, 1]
-        t00 = t00[:, None] + noise[None, :, 0, 0, None]
-        t01 = t01[:, None] + noise[None, :, 0, 1, None]
-        t11 = t11[:, None] + noise[None, :, 1, 1, None]
-        det = t00 * t11 - t01 * t01
-        nu0 = observations[None, :, 0, None] - rho[:, None]
-        nu1 = wrap_angle(observations[None, :, 1, None] - bearing[:, None])
-        distance2 = (t11 * nu0 * nu0 - 2 * t01 * nu0 * nu1 + t00 * nu1 * nu1) / det
-        distance2[~np.broadcast_to(self.exists[:, None, :m], distance2.shape)] = np.inf
-        return MeasurementModel(rho, bearing, h, (nu0, nu1), det, distance2)
-
-    def _apply(
-        self,
-        k,
-        slots,
-        model: MeasurementModel,
-        distance2: np.ndarray,
-        likelihood,
-        observation,
-        noise,
-        identity,
-        facing,
-        matched_now,
-        report,
-    ) -> None:
-        """EKF-update the landmarks matched by observation k, start new ones, and weigh the particles.
-
-        ``model`` linearises at the poses the particles now have; ``distance2`` (P, K, m) is the
-        association's, which decides whether an unmatched observation is new; ``likelihood`` the
-        squared Mahalanobis distances and determinants (P, K) of the associated observations that
-        weigh the particles (the association's for FastSLAM 1.0; the joint scan likelihood's
-        factors for 2.0). ``identity`` and ``facing`` are the observation's (None: unknown).
-        """
-        rows = np.flatnonzero(slots >= 0)
-        if len(rows):
-            j = slots[rows]
-            residual = np.column_stack([model.nu[0][rows, k, j], model.nu[1][rows, k, j]])
-            self.means[rows, j], self.covariances[rows, j], _ = ekf.update(
-                self.means[rows, j], self.covariances[rows, j], residual, model.jacobians(rows, j), noise
-            )
-            self.log_weights[rows] += -0.5 * likelihood[0][rows, k] - LOG_TWO_PI - 0.5 * np.log(likelihood[1][rows, k])
-            self.seen[rows, j] += 1
-            self.missed[rows, j] = 0
-            matched_now[rows, j] = True
-            report.matched += len(rows)
-        unmatched = slots < 0
-        nearest = distance2[:, k].min(axis=1, initial=np.inf)
-        # Known association: an identity not yet mapped starts a landmark; none (-1): left out.
+    def _new_observations(self, assigned: np.ndarray, model: MeasurementModel, ids, report: UpdateReport):
+        """(P, K) the unmatched observations that start a landmark: with unknown association those
+        farther than ``new_landmark_gate`` from every landmark (the nearer ones are ambiguous and
+        counted in ``report``); with known association those of an identity not yet mapped."""
+        unmatched = assigned < 0
         if self.params.association == Association.KNOWN:
-            new = unmatched & (identity >= 0)
+            new = unmatched & (np.asarray(ids)[None, :] >= 0)
         else:
+            nearest = model.distance2.min(axis=2, initial=np.inf)
             new = unmatched & (nearest >= self.params.new_landmark_gate)
         report.ambiguous += int((unmatched & ~new).sum())
-        if new.any():
-            self._add_landmarks(np.flatnonzero(new), observation, noise, identity, facing, matched_now)
-            # A new landmark's likelihood: the density at the edge of the new-landmark gate.
-            self.log_weights[new] += (
-                -0.5 * self.params.new_landmark_gate - LOG_TWO_PI - 0.5 * math.log(np.linalg.det(noise))
-            )
-            report.new += int(new.sum())
+        report.new += int(new.sum())
+        return new
 
-    def _add_landmarks(self, rows: np.ndarray, observation, noise, identity, facing, matched_now) -> None:
-        """Initialise a landmark from one observation in each particle of ``rows`` (its identity
-        and its facing relative to the robot, rad, or None)."""
-        slots = (~self.exists[rows]).argmax(axis=1)  # the first free slot (update made room)
-        rho, bearing = observation
+    def _weigh(self, assigned: np.ndarray, new: np.ndarray, likelihood, noise: np.ndarray) -> None:
+        """Multiply each particle's weight by its observations' likelihoods: for an associated one
+        the Gaussian density of its innovation (``likelihood``: squared Mahalanobis distances and
+        determinants (P, K)); for a new landmark the density at the edge of the new-landmark gate.
+        Added observation by observation, in order."""
+        matched = -0.5 * likelihood[0] - LOG_TWO_PI - 0.5 * np.log(likelihood[1])
+        start = -0.5 * self.params.new_landmark_gate - LOG_TWO_PI - 0.5 * np.log(np.linalg.det(noise))  # (K,)
+        terms = np.where(assigned >= 0, matched, np.where(new, start[None, :], 0.0))
+        for k in range(terms.shape[1]):
+            self.log_weights += terms[:, k]
+
+    def _correct_landmarks(
+        self, assigned: np.ndarray, observations: np.ndarray, noise: np.ndarray, matched_now, report: UpdateReport
+    ) -> None:
+        """EKF-update every landmark slot ``assigned`` (P, K) to an observation, linearised at the
+        poses the particles now have, all pairs at once. (A slot assigned twice in one scan, known
+        association with a repeated identity, is updated once per observation, in order.)"""
+        rows, ks = np.nonzero(assigned >= 0)
+        slots = assigned[rows, ks]
+        report.matched += len(rows)
+        first = self._first_updates(rows, slots)
+        while len(rows):
+            r, k, j = rows[first], ks[first], slots[first]
+            predicted, jacobian, _ = ekf.range_bearing(self.poses[r], self.means[r, j])
+            residual = ekf.innovation(observations[k], predicted)
+            self.means[r, j], self.covariances[r, j], _ = ekf.update(
+                self.means[r, j], self.covariances[r, j], residual, jacobian, noise[k]
+            )
+            self.seen[r, j] += 1
+            self.missed[r, j] = 0
+            matched_now[r, j] = True
+            self._widen_index(r, j)
+            rows, ks, slots = rows[~first], ks[~first], slots[~first]
+            first = self._first_updates(rows, slots)
+
+    def _first_updates(self, rows: np.ndarray, slots: np.ndarray) -> np.ndarray:
+        """(n,) True for the first of the landmark updates ``rows``, ``slots`` (n,) of each
+        landmark: all of them with unknown association, which assigns a slot at most once."""
+        if self.params.association != Association.KNOWN:
+            return np.ones(len(rows), dtype=bool)
+        first = np.zeros(len(rows), dtype=bool)
+        first[np.unique(rows * self.exists.shape[1] + slots, return_index=True)[1]] = True
+        return first
+
+    def _add_landmarks(self, new: np.ndarray, observations, noise, ids, facings, matched_now) -> None:
+        """Initialise a landmark from each ``new`` (P, K) observation in its particle, in the
+        particle's first free slots in order; ``ids`` (K,) and ``facings`` (K,) (rad, relative to
+        the robot) are the observations' when known, else None."""
+        rows, ks = np.nonzero(new)
+        if not len(rows):
+            return
+        slots = self._free_slots(new.shape[1])[rows, np.cumsum(new, axis=1)[rows, ks] - 1]
+        rho, bearing = observations[ks, 0], observations[ks, 1]
         angle = self.poses[rows, 2] + bearing
         cos_a, sin_a = np.cos(angle), np.sin(angle)
-        self.means[rows, slots] = self.poses[rows, :2] + rho * np.column_stack([cos_a, sin_a])
+        self.means[rows, slots] = self.poses[rows, :2] + rho[:, None] * np.column_stack([cos_a, sin_a])
         # Inverse measurement Jacobian dm/d(rho, bearing), then Sigma = G R G^T.
         g = np.stack([np.stack([cos_a, -rho * sin_a], -1), np.stack([sin_a, rho * cos_a], -1)], -2)
-        self.covariances[rows, slots] = g @ noise @ np.swapaxes(g, -1, -2)
+        self.covariances[rows, slots] = g @ noise[ks] @ np.swapaxes(g, -1, -2)
         self.exists[rows, slots] = True
         self.seen[rows, slots] = 1
         self.missed[rows, slots] = 0
-        self.ids[rows, slots] = -1 if identity is None else identity
-        self.facings[rows, slots] = np.nan if facing is None else wrap_angle(self.poses[rows, 2] + facing)
+        self.ids[rows, slots] = -1 if ids is None else np.asarray(ids)[ks]
+        self.facings[rows, slots] = np.nan if facings is None else wrap_angle(self.poses[rows, 2] + facings[ks])
         matched_now[rows, slots] = True
+        self._widen_index(rows, slots)
+
+    def _free_slots(self, count: int) -> np.ndarray:
+        """The first ``count`` free slots (P, count) of every particle, ascending (update made room)."""
+        free = ~self.exists[:, : self._used_slots() + count]
+        rows, slots = np.nonzero(free & (np.cumsum(free, axis=1) <= count))
+        return slots.reshape(len(free), count)
 
     def _grow(self) -> None:
         """Double the landmark slots of every particle."""
@@ -457,29 +595,28 @@ class FastSLAM:
         self.missed = np.concatenate([self.missed, np.zeros((p, m), dtype=np.int32)], axis=1)
         self.ids = np.concatenate([self.ids, np.full((p, m), -1, dtype=np.int64)], axis=1)
         self.facings = np.concatenate([self.facings, np.full((p, m), np.nan)], axis=1)
+        self.reindex()
 
-    def _gate_by_facing(self, distance2: np.ndarray, facings: np.ndarray, m: int) -> None:
-        """Rule out (inf in ``distance2`` (P, K, m)) every pair whose landmark faces more than
-        ``facing_gate`` away from the observation (``facings`` (K,) relative to the robot, rad);
-        landmarks or observations of unknown facing (NaN) are not ruled out."""
+    def _gate_by_facing(self, model: MeasurementModel, facings: np.ndarray) -> None:
+        """Rule out (inf in ``model.distance2`` (P, K, C)) every pair whose landmark faces more
+        than ``facing_gate`` away from the observation (``facings`` (K,) relative to the robot,
+        rad); landmarks or observations of unknown facing (NaN) are not ruled out."""
         world = self.poses[:, None, 2] + facings[None, :]  # (P, K)
-        apart = np.abs(wrap_angle(world[:, :, None] - self.facings[:, None, :m]))
-        distance2[apart > math.radians(self.params.facing_gate)] = np.inf  # NaN compares False: kept
+        landmark = self.facings[:, model.candidates.slots]  # (P, C)
+        apart = np.abs(ekf.wrap(world[:, :, None] - landmark[:, None, :]))
+        model.distance2[apart > math.radians(self.params.facing_gate)] = np.inf  # NaN compares False: kept
 
-    def _manage_landmarks(self, predicted_range: np.ndarray, matched_now: np.ndarray, report: UpdateReport) -> None:
-        """Count misses of tentative landmarks predicted in view (``predicted_range`` (P, m) of the
-        slots that existed before this scan), and remove repeatedly missed ones."""
-        m = predicted_range.shape[1]
-        in_view = (
-            self.exists[:, :m]
-            & (self.seen[:, :m] <= 1)
-            & ~matched_now[:, :m]
-            & (predicted_range < self.params.view_range)
-        )
-        self.missed[:, :m][in_view] += 1
-        remove = self.exists & (self.missed >= self.params.tentative_limit)
+    def _manage_landmarks(self, matched_now: np.ndarray, report: UpdateReport) -> None:
+        """Count a miss for every tentative landmark (seen once, not matched now) within
+        ``view_range`` of its particle's pose, and remove those missed ``tentative_limit`` times."""
+        rows, slots = np.nonzero(self.exists & (self.seen <= 1) & ~matched_now)
+        delta = self.means[rows, slots] - self.poses[rows, :2]
+        in_view = np.sqrt(np.maximum(delta[:, 0] ** 2 + delta[:, 1] ** 2, 1e-12)) < self.params.view_range
+        rows, slots = rows[in_view], slots[in_view]
+        self.missed[rows, slots] += 1
+        remove = self.missed[rows, slots] >= self.params.tentative_limit
         report.removed += int(remove.sum())
-        self.exists[remove] = False
+        self.exists[rows[remove], slots[remove]] = False
 
     # -- weights ------------------------------------------------------------------------------
     def weights(self) -> np.ndarray:
@@ -490,12 +627,19 @@ class FastSLAM:
         return effective_sample_size(self.weights())
 
     def resample(self) -> None:
-        """Low-variance (systematic) resampling; weights become uniform."""
-        index = systematic_resample(self.weights(), self.rng)
-        for name in ("poses", "means", "covariances", "exists", "seen", "missed", "ids", "facings", "pose_covariances"):
-            setattr(self, name, getattr(self, name)[index])
-        self.log_weights = np.full(len(index), -math.log(len(index)))
+        """Low-variance (systematic) resampling, in place: only the particles that change are
+        overwritten, and only in the landmark slots in use; weights become uniform."""
+        targets, sources = resampling.changed_rows(resampling.systematic_resample(self.weights(), self.rng))
+        m = self._used_slots()  # the slots beyond hold no landmark in any particle: not copied
+        for name in ("means", "covariances", "exists", "seen", "missed", "ids", "facings"):
+            array = getattr(self, name)
+            array[targets, :m] = array[sources, :m]
+        self.poses[targets] = self.poses[sources]
+        self.pose_covariances[targets] = self.pose_covariances[sources]
+        self.log_weights = np.full(len(self.poses), -math.log(len(self.poses)))
         self.resamplings += 1
+        widths = np.maximum(self._boxes[:m, 2] - self._boxes[:m, 0], self._boxes[:m, 3] - self._boxes[:m, 1])
+        self.reindex(np.flatnonzero(widths > REINDEX_WIDTH))  # slots that held far-apart landmarks
 
     # -- estimates ----------------------------------------------------------------------------
     def mean_pose(self) -> np.ndarray:
@@ -527,11 +671,12 @@ class FastSLAM:
 def _associated_terms(model: MeasurementModel, assigned: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """The squared Mahalanobis distance and determinant (P, K) of each observation's innovation
     with the slot ``assigned`` (P, K) to it (NaN where none)."""
-    rows, observations = np.nonzero(assigned >= 0)
+    columns = model.candidates.columns_of(assigned)
+    rows, observations = np.nonzero(columns >= 0)
     distance2, determinant = np.full(assigned.shape, np.nan), np.full(assigned.shape, np.nan)
-    slots = assigned[rows, observations]
-    distance2[rows, observations] = model.distance2[rows, observations, slots]
-    determinant[rows, observations] = model.det[rows, observations, slots]
+    picked = columns[rows, observations]
+    distance2[rows, observations] = model.distance2[rows, observations, picked]
+    determinant[rows, observations] = model.det[rows, observations, picked]
     return distance2, determinant
 
 

@@ -148,8 +148,10 @@ class ObservationProposal:
             landmark_noise = h_landmark @ covariances[rows, slots] @ np.swapaxes(h_landmark, -1, -2) + noise[k]
             residual = ekf.innovation(observation, z_hat)
             mean[rows], covariance[rows], s = ekf.update(mean[rows], covariance[rows], residual, h_pose, landmark_noise)
-            distance2[rows, k] = np.einsum("ni,nij,nj->n", residual, np.linalg.inv(s), residual)
-            determinant[rows, k] = np.linalg.det(s)
+            s00, s01, s11 = s[:, 0, 0], s[:, 0, 1], s[:, 1, 1]
+            determinant[rows, k] = s00 * s11 - s01 * s01
+            nu0, nu1 = residual[:, 0], residual[:, 1]
+            distance2[rows, k] = (s11 * nu0 * nu0 - 2 * s01 * nu0 * nu1 + s00 * nu1 * nu1) / determinant[rows, k]
         drawn = ekf.sample_gaussians(mean, covariance, rng)
         drawn[:, 2] = wrap_angle(drawn[:, 2])
         return drawn, np.zeros_like(covariance), (distance2, determinant)

@@ -27,3 +27,11 @@ def systematic_resample(weights: np.ndarray, rng: np.random.Generator) -> np.nda
     cumulative = np.cumsum(weights)
     cumulative[-1] = 1.0
     return np.searchsorted(cumulative, positions)
+
+
+def changed_rows(index: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Resampling ``index`` (P,) as row copies ``rows[targets] = rows[sources]`` (n,) each, with
+    the result of ``rows[index]`` (same order, so the same random draws follow): only the rows
+    whose particle changes are copied (the right-hand side is read before it is written)."""
+    targets = np.flatnonzero(index != np.arange(len(index)))
+    return targets, index[targets]
