@@ -79,6 +79,14 @@ def update(
     return new_mean, _array(new_covariance), _array(s)
 
 
+def congruence(matrix: np.ndarray, transform: np.ndarray) -> np.ndarray:
+    """``A M A^T`` (n, r, r) of a batch of transforms A (n, r, c) and matrices M (c, c) or
+    (n, c, c) (covariance propagation), entry by entry like ``update``."""
+    a = _entries(transform)
+    m = _entries(np.broadcast_to(matrix, (len(transform), *np.shape(matrix)[-2:])))
+    return _array(_product(_product(a, m), _transpose(a)))
+
+
 # Small matrices over a batch, entry by entry: a matrix (n, r, c) is r lists of c arrays (n,).
 def _entries(matrix: np.ndarray) -> list[list[np.ndarray]]:
     return [[matrix[:, i, j] for j in range(matrix.shape[2])] for i in range(matrix.shape[1])]

@@ -290,9 +290,19 @@ class FastSLAM:
 
     # -- observation model --------------------------------------------------------------------
     def _used_slots(self) -> int:
-        """Slots 0..m-1 hold every landmark of every particle; the rest is spare capacity."""
-        used = np.flatnonzero(self.exists.any(axis=0))
+        """Slots 0..m-1 hold every landmark of every particle; the rest is spare capacity. (Read
+        from the index: a slot whose box is not empty holds, or held, a landmark.)"""
+        used = np.flatnonzero(self._boxes[:, 0] <= self._boxes[:, 2])
         return int(used[-1]) + 1 if len(used) else 0
+
+    def _gaps(self, low: np.ndarray, high: np.ndarray, m: int) -> np.ndarray:
+        """(m, B) squared distance (m^2) between the index box of each of the first ``m`` slots and
+        each of B boxes with corners ``low`` and ``high`` (B, 2) (world frame); inf for a slot
+        that holds no landmark."""
+        box = self._boxes[:m, :, None]  # (m, 4, 1): x min, y min, x max, y max
+        gap_x = np.maximum(np.maximum(box[:, 0] - high[:, 0], low[:, 0] - box[:, 2]), 0.0)
+        gap_y = np.maximum(np.maximum(box[:, 1] - high[:, 1], low[:, 1] - box[:, 3]), 0.0)
+        return gap_x * gap_x + gap_y * gap_y
 
     def _candidates(self, observations: np.ndarray, noise: np.ndarray, m: int, assigned=None) -> Candidates:
         """The slots among the first ``m`` that can be associated with any of the scan's
@@ -315,10 +325,9 @@ class FastSLAM:
         angle = self.poses[:, None, 2] + observations[None, :, 1]  # (P, K)
         x = self.poses[:, None, 0] + observations[None, :, 0] * np.cos(angle)
         y = self.poses[:, None, 1] + observations[None, :, 0] * np.sin(angle)
-        box = self._boxes[:m, :, None]  # (m, 4, 1): x min, y min, x max, y max
-        gap_x = np.maximum(np.maximum(box[:, 0] - x.max(axis=0), x.min(axis=0) - box[:, 2]), 0.0)  # (m, K)
-        gap_y = np.maximum(np.maximum(box[:, 1] - y.max(axis=0), y.min(axis=0) - box[:, 3]), 0.0)
-        near = gap_x * gap_x + gap_y * gap_y < self._reach(observations, noise, m) ** 2  # (m, K)
+        low = np.column_stack([x.min(axis=0), y.min(axis=0)])  # (K, 2): each observation's box
+        high = np.column_stack([x.max(axis=0), y.max(axis=0)])
+        near = self._gaps(low, high, m) < self._reach(observations, noise, m) ** 2  # (m, K)
         if assigned is not None:
             rows, ks = np.nonzero(assigned >= 0)
             near[assigned[rows, ks], ks] = True
@@ -457,7 +466,7 @@ class FastSLAM:
         known = self.params.association == Association.KNOWN
         if count and known and ids is None:
             raise ValueError("association='known' needs the observations' ids")
-        while count and (~self.exists).sum(axis=1).min() < count:  # room for every observation to start a landmark
+        while count and not self._has_room(count):  # for every observation to start a landmark
             self._grow()
         noise = self.params.inflation * self.params.observation_noise(covariances, count)
         relative_facings = None if facings is None else np.asarray(facings, dtype=float)
@@ -606,10 +615,20 @@ class FastSLAM:
         apart = np.abs(ekf.wrap(world[:, :, None] - landmark[:, None, :]))
         model.distance2[apart > math.radians(self.params.facing_gate)] = np.inf  # NaN compares False: kept
 
+    def _has_room(self, count: int) -> bool:
+        """Every particle has ``count`` free slots (surely so when the slots beyond the used ones do)."""
+        return self.exists.shape[1] - self._used_slots() >= count or (~self.exists).sum(axis=1).min() >= count
+
     def _manage_landmarks(self, matched_now: np.ndarray, report: UpdateReport) -> None:
         """Count a miss for every tentative landmark (seen once, not matched now) within
-        ``view_range`` of its particle's pose, and remove those missed ``tentative_limit`` times."""
-        rows, slots = np.nonzero(self.exists & (self.seen <= 1) & ~matched_now)
+        ``view_range`` of its particle's pose, and remove those missed ``tentative_limit`` times.
+        Only the slots whose index box is that near the particles' box are looked at."""
+        position = self.poses[:, :2]
+        gaps = self._gaps(position.min(axis=0)[None], position.max(axis=0)[None], self._used_slots())[:, 0]
+        columns = np.flatnonzero(gaps < self.params.view_range**2)
+        tentative = self.exists[:, columns] & (self.seen[:, columns] <= 1) & ~matched_now[:, columns]
+        rows, picked = np.nonzero(tentative)
+        slots = columns[picked]
         delta = self.means[rows, slots] - self.poses[rows, :2]
         in_view = np.sqrt(np.maximum(delta[:, 0] ** 2 + delta[:, 1] ** 2, 1e-12)) < self.params.view_range
         rows, slots = rows[in_view], slots[in_view]
@@ -630,7 +649,8 @@ class FastSLAM:
         """Low-variance (systematic) resampling, in place: only the particles that change are
         overwritten, and only in the landmark slots in use; weights become uniform."""
         targets, sources = resampling.changed_rows(resampling.systematic_resample(self.weights(), self.rng))
-        m = self._used_slots()  # the slots beyond hold no landmark in any particle: not copied
+        held = np.flatnonzero(self.exists.any(axis=0))  # the slots beyond hold no landmark: not copied
+        m = int(held[-1]) + 1 if len(held) else 0
         for name in ("means", "covariances", "exists", "seen", "missed", "ids", "facings"):
             array = getattr(self, name)
             array[targets, :m] = array[sources, :m]

@@ -145,7 +145,7 @@ class ObservationProposal:
                 continue
             slots = assigned[rows, k]
             z_hat, h_landmark, h_pose = ekf.range_bearing(mean[rows], means[rows, slots])
-            landmark_noise = h_landmark @ covariances[rows, slots] @ np.swapaxes(h_landmark, -1, -2) + noise[k]
+            landmark_noise = ekf.congruence(covariances[rows, slots], h_landmark) + noise[k]
             residual = ekf.innovation(observation, z_hat)
             mean[rows], covariance[rows], s = ekf.update(mean[rows], covariance[rows], residual, h_pose, landmark_noise)
             s00, s01, s11 = s[:, 0, 0], s[:, 0, 1], s[:, 1, 1]
@@ -160,7 +160,7 @@ class ObservationProposal:
 def _propagate(covariance: np.ndarray, f: np.ndarray, v: np.ndarray, motion: np.ndarray) -> np.ndarray:
     """F Sigma F^T + V Q V^T: each particle's covariance (P, 3, 3) through one motion with
     Jacobians F (P, 3, 3) w.r.t. the pose and V (P, 3, k) w.r.t. its k noisy terms, Q (k, k)."""
-    return f @ covariance @ np.swapaxes(f, 1, 2) + v @ motion @ np.swapaxes(v, 1, 2)
+    return ekf.congruence(covariance, f) + ekf.congruence(motion, v)
 
 
 PROPOSALS: dict[int, type[Proposal]] = {1: MotionProposal, 2: ObservationProposal}
