@@ -1,14 +1,20 @@
 """Benchmark: mazeslam/Maze-v0 steps per second (180 beams, 16 x 16 maze, one process), side by
 side with ir-sim stepping a comparable robot (differential drive, 37 mm disc) with a comparable
 lidar (180 beams over 360 degrees, 0.8 m) among the same maze walls, in the same run.
-Targets: at least 2000 steps/s and 3x ir-sim's rate. ir-sim is optional (``pip install ir-sim``);
-without it only mazeslam's rate is reported.
+Targets: at least 2000 steps/s and 3x ir-sim's rate. ir-sim is pinned (``IRSIM_VERSION``): the
+benchmark installs that version with pip when another or none is there (``--no-install`` or
+``MAZESLAM_BENCH_NO_INSTALL=1`` to never install); when it cannot, it reports ir-sim as skipped,
+with the reason.
 Run: ``python benchmarks/bench_env.py``.
 """
 
 from __future__ import annotations
 
+import importlib
+import importlib.metadata
 import os
+import subprocess
+import sys
 import tempfile
 import time
 from pathlib import Path
@@ -23,6 +29,45 @@ ROWS = COLS = 16
 STEPS = 1000
 TARGET_RATE = 2000.0
 TARGET_RATIO = 3.0
+#: The ir-sim release compared against (the one the issues' figures were measured with).
+IRSIM_VERSION = "2.12.0"
+
+
+def installed_irsim() -> str | None:
+    """The installed ir-sim's version, or None."""
+    try:
+        return importlib.metadata.version("ir-sim")
+    except importlib.metadata.PackageNotFoundError:
+        return None
+
+
+def ensure_irsim() -> str | None:
+    """Make ir-sim ``IRSIM_VERSION`` importable, installing it with pip unless told not to; return
+    None when it is, else why it is not (for the report: never skipped silently)."""
+    if installed_irsim() == IRSIM_VERSION:
+        return None
+    found = installed_irsim() or "none"
+    if "--no-install" in sys.argv or os.environ.get("MAZESLAM_BENCH_NO_INSTALL"):
+        return f"ir-sim {IRSIM_VERSION} is not installed (found: {found}) and installing is turned off"
+    print(f"installing ir-sim {IRSIM_VERSION} (found: {found}) for the comparison ...", file=sys.stderr, flush=True)
+    command = [sys.executable, "-m", "pip", "install", "--quiet", f"ir-sim=={IRSIM_VERSION}"]
+    result = subprocess.run(command, capture_output=True, text=True)
+    importlib.invalidate_caches()
+    if result.returncode != 0 or installed_irsim() != IRSIM_VERSION:
+        last = (result.stderr.strip().splitlines() or ["no message"])[-1]
+        return f"pip could not install ir-sim {IRSIM_VERSION}: {last}"
+    return None
+
+
+def irsim_comparison(maze, steps: int = 300) -> tuple[float | None, str | None]:
+    """ir-sim's steps/s in ``maze`` (``irsim_rate``), or None and why it was skipped."""
+    reason = ensure_irsim()
+    if reason is not None:
+        return None, reason
+    try:
+        return irsim_rate(maze, steps), None
+    except Exception as error:  # a failing comparison is reported, not fatal
+        return None, f"ir-sim {IRSIM_VERSION} failed: {type(error).__name__}: {error}"
 
 
 def mazeslam_rate(maze) -> float:
@@ -36,12 +81,11 @@ def mazeslam_rate(maze) -> float:
     return STEPS / (time.perf_counter() - began)
 
 
-def irsim_rate(maze, steps: int = 300) -> float | None:
+def irsim_rate(maze, steps: int = 300) -> float:
+    """ir-sim's steps per second, its robot and 180-beam lidar among ``maze``'s wall boxes."""
     os.environ.setdefault("MPLBACKEND", "Agg")
-    try:
-        import irsim
-    except ImportError:
-        return None
+    import irsim
+
     from mazeslam.envs.walls import wall_geometry
 
     obstacles = "\n".join(
@@ -86,7 +130,7 @@ obstacle:
 def run() -> dict:
     maze = generate_maze(ROWS, COLS, 0)
     ours = mazeslam_rate(maze)
-    theirs = irsim_rate(maze)
+    theirs, skipped = irsim_comparison(maze)
     row = {
         "benchmark": f"env steps/s, 180 beams, {ROWS}x{COLS} maze",
         "mazeslam_steps_per_s": ours,
@@ -94,6 +138,8 @@ def run() -> dict:
     }
     if theirs is not None:
         row.update({"irsim_steps_per_s": theirs, "ratio": ours / theirs})
+    else:
+        row["irsim"] = f"skipped: {skipped}"
     row["met"] = ours >= TARGET_RATE and (theirs is None or ours / theirs >= TARGET_RATIO)
     return row
 

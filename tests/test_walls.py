@@ -3,8 +3,9 @@ from collections import Counter
 import numpy as np
 import pytest
 
+from mazeslam.envs.laser import RayCaster
 from mazeslam.envs.maze import generate_maze, parse_maze
-from mazeslam.envs.walls import wall_geometry
+from mazeslam.envs.walls import WallsInSight, wall_geometry
 
 
 def as_set(rows):
@@ -90,3 +91,25 @@ def test_boxes_cover_exactly_the_solid_area():
     free = 25 * (s - t) ** 2 + openings * (s - t) * t
     total = (5 * s + t) ** 2
     assert area == pytest.approx(total - free)
+
+
+@pytest.mark.parametrize("loops", [0.0, 0.3])
+def test_walls_in_sight_give_the_same_hits_as_every_wall(loops):
+    maze = generate_maze(10, 10, 3, loop_fraction=loops, cell_size=0.15, wall_thickness=0.01)
+    geometry = wall_geometry(maze)
+    surfaces, boxes = geometry.surfaces, geometry.boxes
+    bearings = np.linspace(-np.pi, np.pi, 720, endpoint=False)
+    caster = RayCaster(surfaces, bearings, 0.8)
+    in_sight = WallsInSight(maze, surfaces, 0.8)
+    rng = np.random.default_rng(0)
+    fewer = 0
+    for _ in range(600):  # anywhere free: cell interiors and open walls' gaps
+        x, y = rng.uniform(0.0, 1.5, 2)
+        if ((boxes[:, :2] <= (x, y)) & ((x, y) <= boxes[:, 2:])).all(axis=1).any():
+            continue  # inside a wall
+        candidates = in_sight.walls(x, y)
+        fewer += len(candidates) < len(surfaces)
+        everything, walls, fractions = caster.hits(x, y, 0.3)
+        np.testing.assert_array_equal(caster.hits(x, y, 0.3, candidates)[0], everything)
+        np.testing.assert_array_equal(caster.hits(x, y, 0.3, candidates)[1], walls)
+    assert fewer > 100

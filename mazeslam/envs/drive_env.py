@@ -80,7 +80,7 @@ class DriveEnv(gym.Env):
         """Count a step and turn its action into (left, right) wheel speeds, m/s."""
         if self.steps is None:
             raise RuntimeError("call reset() before step()")
-        first, second = (min(max(float(value), -1.0), 1.0) for value in np.asarray(action, dtype=float).ravel()[:2])
+        first, second = (min(max(float(action[k]), -1.0), 1.0) for k in (0, 1))
         self.steps += 1
         robot = self.config.robot
         if self.action_type == "wheels":

@@ -119,11 +119,15 @@ class RayCaster:
         np.minimum.at(distances, beam, t)
         return distances
 
-    def hits(self, x: float, y: float, heading: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    def hits(
+        self, x: float, y: float, heading: float, candidates: np.ndarray | None = None
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """As ``cast``, with where each beam lands: ``(distances, walls, fractions)``, all (N,): the
         distances (m, inf: none within ``max_range``), the index of the wall segment hit (-1: none)
-        and how far along it from its first end (0 to 1)."""
-        beam, segment, t, s = self._crossings(x, y, heading)
+        and how far along it from its first end (0 to 1). ``candidates``: indices of the only walls
+        a beam can meet first from here (e.g. ``walls.WallsInSight``), instead of every wall within
+        ``max_range``."""
+        beam, segment, t, s = self._crossings(x, y, heading, candidates)
         distances = np.full(len(self.bearings), np.inf)
         np.minimum.at(distances, beam, t)
         nearest = t == distances[beam]
@@ -131,11 +135,15 @@ class RayCaster:
         walls[beam[nearest]], fractions[beam[nearest]] = segment[nearest], s[nearest]
         return distances, walls, fractions
 
-    def _crossings(self, x: float, y: float, heading: float):
-        """Every beam's crossings with the walls within ``max_range``: (M,) arrays of the beam
-        index, the wall segment index, the distance (m) and the fraction along the segment."""
-        gap = np.maximum(np.maximum(self.box_low - (x, y), (x, y) - self.box_high), 0.0)
-        near = np.flatnonzero(np.einsum("ij,ij->i", gap, gap) <= self.max_range**2)
+    def _crossings(self, x: float, y: float, heading: float, candidates: np.ndarray | None = None):
+        """Every beam's crossings with the walls within ``max_range`` (or the ``candidates``): (M,)
+        arrays of the beam index, the wall segment index, the distance (m) and the fraction along
+        the segment."""
+        if candidates is None:
+            gap = np.maximum(np.maximum(self.box_low - (x, y), (x, y) - self.box_high), 0.0)
+            near = np.flatnonzero(np.einsum("ij,ij->i", gap, gap) <= self.max_range**2)
+        else:
+            near = candidates
         px, py = self.start_x[near] - x, self.start_y[near] - y  # wall starts relative to the sensor
         ex, ey = self.vector_x[near], self.vector_y[near]
         segment, beam = self._beams_facing(px, py, px + ex, py + ey, heading)

@@ -11,6 +11,7 @@ from mazeslam.envs.drive_env import DriveEnv
 from mazeslam.envs.maze import Maze, generate_maze, load_maze
 from mazeslam.envs.simulated_robot import SimulatedRobot
 from mazeslam.envs.simulator import MazeParams, SimulationConfig
+from mazeslam.envs.walls import WallsInSight
 from mazeslam.geometry import transform_points
 
 #: Spacing (m) of the points along the walls that count as seen once a beam lands near them.
@@ -96,6 +97,7 @@ class MazeEnv(DriveEnv):
         self.start_pose = draw_start_pose(maze, options, self.np_random)
         self.simulated = SimulatedRobot(maze, self.config, start_pose=self.start_pose, rng=self.np_random)
         self.walls, self.laser = self.simulated.walls, self.simulated.laser
+        self._in_sight = WallsInSight(maze, self.walls.surfaces, self.config.laser.max_range)
         self._samples, self._sample_counts = _wall_samples(self.walls.surfaces)
         self._sample_starts = np.cumsum(self._sample_counts) - self._sample_counts
         self.seen = np.zeros(len(self._samples), dtype=bool)
@@ -136,9 +138,10 @@ class MazeEnv(DriveEnv):
         """Scan from the robot's true ``pose`` (into ``last_scan``) and mark the wall samples its
         noise-free beams land on (on the wall face a beam meets, the sample nearest to where it
         lands, always within ``WALL_SAMPLE_SPACING``); return how many are new."""
-        sensor_x, sensor_y = transform_points(pose, self.laser.mount)
+        sensor_x, sensor_y = (float(value) for value in transform_points(pose, self.laser.mount))
         # The laser's own ray cast (as ``true_ranges``), with the wall each beam lands on.
-        ranges, walls, fractions = self.laser.caster.hits(float(sensor_x), float(sensor_y), float(pose[2]))
+        in_sight = self._in_sight.walls(sensor_x, sensor_y)
+        ranges, walls, fractions = self.laser.caster.hits(sensor_x, sensor_y, float(pose[2]), in_sight)
         self.last_scan = self.simulated.read_scan(ranges).astype(np.float32)
         hit = walls >= 0
         counts = self._sample_counts[walls[hit]]

@@ -238,26 +238,31 @@ class MazeVectorEnv(VectorEnv):
 
     def _drive(self, speeds: np.ndarray, slip: np.ndarray) -> np.ndarray:
         """Drive every robot at wheel ``speeds`` (E, 2) (m/s) for one step of physics steps, with
-        ``slip`` (E, steps, 2) standard normals; return (E,) whether each touched a wall."""
+        ``slip`` (E, steps, 2) standard normals; return (E,) whether each touched a wall.
+
+        Each physics step moves a robot along its midpoint heading by its wheels' mean true
+        travel (commanded, scaled, plus slip) and then pushes it out of the walls; the headings of
+        all the physics steps are known beforehand (contacts never turn a robot)."""
         robot, odometry = self.config.robot, self.config.odometry
-        dt = 1.0 / self.config.logger.physics_rate
-        commanded = speeds * dt
+        dt, steps = 1.0 / self.config.logger.physics_rate, slip.shape[1]
+        commanded = speeds * dt  # (E, 2) m per physics step
+        self._commanded += commanded * steps
         scale = 1.0 + np.array([odometry.left_scale_error, odometry.right_scale_error])
-        spread = odometry.slip_std * np.sqrt(np.abs(commanded))
-        x, y, theta = (self.poses[:, k].copy() for k in range(3))
-        touched = np.zeros(self.num_envs, dtype=bool)
-        reach = robot.body_radius + 2 * robot.max_wheel_speed * dt * slip.shape[1]  # with room for slip
+        travel = (commanded * scale)[:, None] + slip * (odometry.slip_std * np.sqrt(np.abs(commanded)))[:, None]
+        turn = (travel[..., 1] - travel[..., 0]) / robot.wheelbase  # (E, steps) rad
+        headings = np.cumsum(np.column_stack([self.poses[:, 2], turn]), axis=1)  # before and after each
+        middle = headings[:, :-1] + 0.5 * turn
+        forward = 0.5 * (travel[..., 0] + travel[..., 1])
+        step_x, step_y = forward * np.cos(middle), forward * np.sin(middle)  # (E, steps) m
+        x, y = self.poses[:, 0].copy(), self.poses[:, 1].copy()
+        reach = robot.body_radius + 2 * robot.max_wheel_speed * dt * steps  # with room for slip
         boxes = self._grids().boxes_near(x, y, reach)
-        for step in range(slip.shape[1]):
-            self._commanded += commanded
-            left, right = (commanded * scale + slip[:, step] * spread).T  # true ground travel, m
-            turn = (right - left) / robot.wheelbase
-            heading = theta + 0.5 * turn  # midpoint heading over the physics step
-            x += 0.5 * (left + right) * np.cos(heading)
-            y += 0.5 * (left + right) * np.sin(heading)
-            theta += turn
+        touched = np.zeros(self.num_envs, dtype=bool)
+        for step in range(steps):
+            x += step_x[:, step]
+            y += step_y[:, step]
             touched |= push_out(x, y, robot.body_radius, boxes)
-        self.poses = np.column_stack([x, y, wrap_angle(theta)])
+        self.poses = np.column_stack([x, y, wrap_angle(headings[:, -1])])
         return touched
 
     def _read_odometry(self) -> np.ndarray:

@@ -14,6 +14,7 @@ The space outside the maze counts as solid; the outer boundary is closed, so no 
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -119,3 +120,63 @@ def _boxes(solid: np.ndarray, xs: np.ndarray, ys: np.ndarray) -> np.ndarray:
         for start, stop in _runs(solid[i], np.ones(solid.shape[1], dtype=bool)):
             boxes.append([xs[start], ys[i], xs[stop], ys[i + 1]])
     return np.array(boxes, dtype=float).reshape(-1, 4)
+
+
+class WallsInSight:
+    """Per maze cell, the wall surfaces that a beam of at most ``reach`` metres from anywhere in
+    the cell can meet first (for ``RayCaster.hits``). A straight beam moves monotonically along x
+    and along y, crossing from cell to cell only through open walls, and every cell it passes
+    lies within ``reach`` of where it started; so it meets a surface that touches one of the cells
+    joined to its own by such a monotone path of cells (one per quadrant of directions). A cell
+    here spans its wall bands (``k s -+ t/2``) too, so a sensor standing in an open wall's gap
+    belongs to either cell beside it. Computed per cell when first asked.
+
+    Args:
+        maze: the maze; ``surfaces``: its (W, 4) wall surfaces (``wall_geometry``), metres;
+        ``reach``: metres (the laser's ``max_range``).
+    """
+
+    def __init__(self, maze: Maze, surfaces: np.ndarray, reach: float):
+        self.maze, self.reach = maze, reach
+        s, t = maze.cell_size, maze.wall_thickness
+        rows, cols = np.mgrid[: maze.rows, : maze.cols]
+        margin = t / 2 + 1e-9  # the wall bands around each cell, and rounding
+        low_x, low_y = (cols * s - margin).ravel(), (rows * s - margin).ravel()
+        high_x, high_y = ((cols + 1) * s + margin).ravel(), ((rows + 1) * s + margin).ravel()
+        box_low, box_high = np.minimum(surfaces[:, :2], surfaces[:, 2:]), np.maximum(surfaces[:, :2], surfaces[:, 2:])
+        # (R*C, W): surface w touches cell c's rectangle.
+        self._touches = (
+            (box_low[:, 0] <= high_x[:, None])
+            & (box_high[:, 0] >= low_x[:, None])
+            & (box_low[:, 1] <= high_y[:, None])
+            & (box_high[:, 1] >= low_y[:, None])
+        )
+        self._cache: dict[tuple[int, int], np.ndarray] = {}
+
+    def walls(self, x: float, y: float) -> np.ndarray:
+        """Indices of the surfaces a beam from (x, y) (m) can meet first."""
+        cell = self.maze.cell_of(x, y)
+        if cell not in self._cache:
+            joined = set().union(*(self._monotone(cell, up, right) for up in (1, -1) for right in (1, -1)))
+            self._cache[cell] = np.flatnonzero(self._touches[[r * self.maze.cols + c for r, c in joined]].any(axis=0))
+        return self._cache[cell]
+
+    def _monotone(self, start: tuple[int, int], up: int, right: int) -> set[tuple[int, int]]:
+        """The cells reached from ``start`` stepping only ``up`` rows (+-1) or ``right`` columns
+        (+-1) through open walls, without leaving ``reach`` of it."""
+        maze, s, t = self.maze, self.maze.cell_size, self.maze.wall_thickness
+        seen, frontier = {start}, [start]
+        while frontier:
+            row, col = frontier.pop()
+            steps = []
+            if not maze.horizontal[row + (up > 0), col]:
+                steps.append((row + up, col))
+            if not maze.vertical[row, col + (right > 0)]:
+                steps.append((row, col + right))
+            for near in steps:
+                # The gap between the two cells' rectangles (bands included), metres.
+                gap = math.hypot(*(max(0.0, (abs(a - b) - 1) * s - t) for a, b in zip(near, start)))
+                if near not in seen and gap <= self.reach:
+                    seen.add(near)
+                    frontier.append(near)
+        return seen
