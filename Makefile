@@ -4,7 +4,7 @@ PYTHON ?= python3
 VENV := .venv
 BIN := $(VENV)/bin
 
-.PHONY: demo test lint bench install
+.PHONY: demo test lint bench install figures
 
 $(BIN)/mazeslam: pyproject.toml
 	$(PYTHON) -m venv $(VENV)
@@ -30,3 +30,7 @@ lint: install
 
 bench: install
 	$(BIN)/python benchmarks/run_all.py
+
+# Every image docs/ and experiments/ show, remade from the code (scripts/make_docs_figures.py --list).
+figures: install
+	$(BIN)/python scripts/make_docs_figures.py

@@ -190,6 +190,8 @@ class CornersLiveView:
         import matplotlib.pyplot as plt
 
         self.view.show(report.features[index], report.title(index), report.true_corners(index))
+        if self.frames == 1:
+            self.figure.set_layout_engine("none")  # laid out by the first frame: the others differ in data only
         if self.window:
             plt.pause(0.001)
         else:

@@ -85,7 +85,7 @@ class CornerReport:
         """What a figure of scan ``index`` shows."""
         return (
             f"{Path(self.scans.source).name}: scan {index} (record {self.scans.records[index]}, "
-            f"t = {self.scans.times[index]:.2f} s), lines and corners in the robot frame"
+            f"t = {self.scans.times[index]:.2f} s)\nits lines and corners, in the robot frame"
         )
 
     @property
@@ -117,6 +117,9 @@ class CornerReport:
         view = ScanView(ax, self.mount, reach=self.reach(), truth=self.scans.true_corners is not None)
         handles, labels = ax.get_legend_handles_labels()
         fig.legend(handles, labels, loc="outside lower center", ncol=4, fontsize=7)
+        view.show(self.features[frames[0]], self.title(frames[0]), self.true_corners(frames[0]))
+        fig.canvas.draw()
+        fig.set_layout_engine("none")  # laid out once: the frames differ in data only
 
         def draw(index):
             view.show(self.features[index], self.title(index), self.true_corners(index))

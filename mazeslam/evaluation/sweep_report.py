@@ -79,41 +79,52 @@ def linked_values(values: list) -> np.ndarray | None:
         return None
 
 
-def tick_labels(values: list) -> list[str]:
-    """Short tick labels: a linked setting (``"a/b/c"``, several settings scaled together) by its first
-    number alone (``axis_label`` says how the others follow), anything else as it is."""
+def scaled_together(values: list) -> bool:
+    """Whether the grid values of a linked setting keep their parts in (about) the same ratios: the
+    parts are scaled together, and the first one stands for all."""
     numbers = linked_values(values)
-    if numbers is None or numbers.shape[1] < 2:
+    if numbers is None or numbers.shape[1] < 2 or (numbers[:, 0] == 0).any():
+        return False
+    ratios = numbers[:, 1:] / numbers[:, :1]
+    return bool(((ratios.max(axis=0) / ratios.min(axis=0) - 1) < 0.05).all())
+
+
+def tick_labels(values: list) -> list[str]:
+    """Short tick labels: settings scaled together (``"a/b/c"``) by their first number alone
+    (``axis_label`` says how the others follow), anything else as it is."""
+    numbers = linked_values(values)
+    if numbers is None or not scaled_together(values):
         return [str(v) for v in values]
     return [f"{n:.2g}" for n in numbers[:, 0]]
 
 
 def axis_label(key: str, values: list) -> str:
     """The x axis label of a grid setting, with units; for settings scaled together, the first one's
-    name and how the others follow it (their ratio to it, when it is the same on every tick)."""
+    name and the others' ratio to it."""
     name = short_name(key)
-    label = SETTING_LABELS.get(name, name)
-    numbers = linked_values(values)
-    if numbers is None or numbers.shape[1] < 2 or "+" not in name:
-        return label
     names = name.split("+")
+    label = SETTING_LABELS.get(name, " / ".join(names))
+    numbers = linked_values(values)
+    if len(names) < 2 or numbers is None or not scaled_together(values):
+        return label
     ratios = numbers[:, 1:] / numbers[:, :1]
     spread = ratios.max(axis=0) / ratios.min(axis=0) - 1
     follows = ", ".join(
-        f"{other} {'=' if s < 0.001 else '≈'} {r:.3g} x" if s < 0.05 else f"{other} scaled with it"
+        f"{other} {'=' if s < 0.001 else '≈'} {r:.3g} x"
         for other, r, s in zip(names[1:], np.median(ratios, axis=0), spread)
     )
     unit = LINKED_UNITS.get(names[0], "")
-    return f"assumed {names[0]}{f' [{unit}]' if unit else ''}\n({follows})"
+    return f"{'assumed ' if unit else ''}{names[0]}{f' [{unit}]' if unit else ''}\n({follows})"
 
 
-def setting_text(key: str, value) -> str:
+def setting_text(key: str, value, values: list | None = None) -> str:
     """``name=value`` of a grid cell, short: settings scaled together by the first one's value."""
     names = short_name(key).split("+")
-    numbers = linked_values([value])
-    if len(names) > 1 and numbers is not None:
-        return f"{names[0]}={numbers[0, 0]:.2g} (and {', '.join(names[1:])} with it)"
-    return f"{short_name(key)}={value}"
+    if len(names) < 2:
+        return f"{names[0]}={value}"
+    if values is not None and scaled_together(values):
+        return f"{names[0]}={float(str(value).split('/')[0]):.2g} (and {', '.join(names[1:])} with it)"
+    return ", ".join(f"{n}={v}" for n, v in zip(names, str(value).split("/")))
 
 
 def make_report(out_dir: str | Path) -> list[Path]:
@@ -245,7 +256,9 @@ def _plot_against(table: pd.DataFrame, key: str, others: list[str], out_dir: Pat
         elif not metric.startswith("optimum"):
             ax.set_ylim(bottom=0)
         if categorical:
-            ax.set_xticks(range(len(values)), tick_labels(values), fontsize=8, rotation=30 if linked else 0)
+            labels = tick_labels(values)
+            long = max(len(label) for label in labels) > 6
+            ax.set_xticks(range(len(values)), labels, fontsize=8, rotation=30 if long else 0)
             ax.set_xlim(-0.5, len(values) - 0.5)
         elif summary[key].min() > 0 and summary[key].max() / summary[key].min() >= 20:
             ax.set_xscale("log")
@@ -303,7 +316,7 @@ def _maps_side_by_side(
         ax.set_aspect("equal")
         ax.tick_params(labelsize=7)
         ax.grid(alpha=0.3)
-        setting = ", ".join(setting_text(k, row[k]) for k in keys)
+        setting = ", ".join(setting_text(k, row[k], list(table[k].unique())) for k in keys)
         ax.set_title(
             f"{setting}\nATE RMSE {row.ate_rmse:.1f} mm as estimated, {row.ate_aligned_rmse:.1f} mm aligned",
             fontsize=8,
