@@ -156,11 +156,14 @@ def _scan_pairs(
     window: int = 12,
     shortest: float = 0.02,
     longest: float = 0.25,
+    most_turn: float = 1.0,
 ):
     """Pairs of nearby scans ((record a, record b), sensor motion (dx, dy, dtheta) in a's frame):
     b among the ``window`` scans after a, the sensor moved between ``shortest`` and ``longest``
     metres (enough to tell conventions apart, little enough to see the same walls); the longest
-    moves first, at most ``max_pairs``, each scan in at most two pairs."""
+    moves first, at most ``max_pairs``, each scan in at most two pairs. Pairs turning more than
+    ``most_turn`` rad come only after all others: odometry is least right in turns (wheels slip,
+    a sensor ahead of the axle swings), and a turn tells the conventions apart least."""
     pose = np.zeros(3)
     scan_poses = {}
     for record in course_log.records():
@@ -175,7 +178,7 @@ def _scan_pairs(
             motion = relative(scan_poses[a], scan_poses[b])
             if shortest <= math.hypot(motion[0], motion[1]) <= longest:
                 pairs.append(((a, b), motion))
-    pairs.sort(key=lambda p: -math.hypot(p[1][0], p[1][1]))
+    pairs.sort(key=lambda p: (abs(p[1][2]) > most_turn, -math.hypot(p[1][0], p[1][1])))
     chosen = []
     uses: dict[int, int] = {}
     for (a, b), motion in pairs:

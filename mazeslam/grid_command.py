@@ -19,7 +19,7 @@ from mazeslam.evaluation.metrics import normalized_estimation_error
 from mazeslam.evaluation.scoring import DEAD_RECKONING, error_table
 from mazeslam.evaluation.sharpness import map_sharpness, sharpness_line
 from mazeslam.filters.motion import dead_reckoning
-from mazeslam.grid.filter import GridSlamResult, run_grid_slam
+from mazeslam.grid.filter import GridSlamParams, GridSlamResult, run_grid_slam
 from mazeslam.grid.map_io import grid_states, write_map
 from mazeslam.loaded_run import LoadedRun
 from mazeslam.slam import SlamConfig
@@ -28,14 +28,25 @@ from mazeslam.slam import SlamConfig
 GRID_MEAN, GRID_BEST = "grid filter (mean)", "grid filter (best particle)"
 
 
+def grid_params(config: SlamConfig) -> GridSlamParams:
+    """``[grid]``, moving by ``[scan_matching]``'s laser odometry when that is enabled."""
+    if config.scan_matching.enabled:
+        return dataclasses.replace(config.grid, laser_odometry=config.scan_matching)
+    return config.grid
+
+
+def grid_on_run(run: LoadedRun, config: SlamConfig, progress: bool = False) -> GridSlamResult:
+    """The grid filter over ``run``, moving by its odometry with the glitch pairs summed and lone
+    glitches left out (``[odometry] jump_tolerance``)."""
+    moved_by = run.log_with_glitch_pairs_summed(config.odometry.jump_tolerance)
+    return run_grid_slam(moved_by, run.geometry, run.start_pose, grid_params(config), progress)
+
+
 def run_grid_command(run: LoadedRun, config: SlamConfig, out_dir: Path, progress: bool = True) -> list[str]:
     """Run the grid filter on ``run`` (laser odometry from ``[scan_matching]`` when enabled), write
     its outputs into ``out_dir`` and return the lines to print."""
-    params = config.grid
-    if config.scan_matching.enabled:
-        params = dataclasses.replace(params, laser_odometry=config.scan_matching)
-    moved_by = run.log_with_glitch_pairs_summed(config.odometry.jump_tolerance)
-    result = run_grid_slam(moved_by, run.geometry, run.start_pose, params, progress)
+    params = grid_params(config)
+    result = grid_on_run(run, config, progress)
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
     paths = {

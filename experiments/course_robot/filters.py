@@ -1,0 +1,114 @@
+"""Issue 16: the course robot's filters compared - dead reckoning, corner FastSLAM and the grid filter.
+
+On log1 (no truth): map sharpness (occupied 1 cm cells of the 0.05-0.4 m returns placed along the
+path, over dead reckoning's) and path extent (bounding-box diagonal, over dead reckoning's) for
+filter seeds 0-4. On simulated course-robot logs (configs/simulation_course_robot.toml, seeds
+201-205, not used for choosing any setting): ATE, pose NEES and the same sharpness, with the true
+path's extent beside the estimates' (dead reckoning's path grows as it drifts, so an extent under
+1 is not by itself a shrunken estimate). Both filters with configs/course.toml: the grid filter as
+``[map] kind = "grid"`` runs it, corner FastSLAM with its ``[fastslam]`` and ``[corners]``.
+
+    .venv/bin/python experiments/course_robot/filters.py    # about 25 min on one core
+
+Writes experiments/course_robot/filters.csv (a row per log, filter, seed and path) and filters.md
+(the per-log medians and worst values), adding rows to the CSV as they come.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import sys
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from mazeslam.beam_detection import detected_geometry
+from mazeslam.envs.simulator import load_config, simulate
+from mazeslam.evaluation.consistency import nees_summary
+from mazeslam.evaluation.metrics import absolute_trajectory_error, normalized_estimation_error
+from mazeslam.evaluation.sharpness import dead_reckoning_without_glitches, map_sharpness, path_extent
+from mazeslam.grid_command import grid_on_run
+from mazeslam.loaded_run import LoadedRun, load_run
+from mazeslam.slam import MapKind, SlamConfig, load_slam_config, slam_on_run
+
+HERE = Path(__file__).resolve().parent
+PROJECT = HERE.parents[1]
+LOG1 = PROJECT.parent / "shared" / "data" / "course" / "log1.txt"
+SIMULATION = PROJECT / "configs" / "simulation_course_robot.toml"
+COURSE = PROJECT / "configs" / "course.toml"
+FILTER_SEEDS = range(5)
+SIMULATION_SEEDS = range(201, 206)
+TABLE = HERE / "filters.csv"
+FILTER_NAMES = {MapKind.GRID: "grid filter", MapKind.LANDMARKS: "corner FastSLAM"}
+
+
+def estimate(run: LoadedRun, config: SlamConfig, kind: MapKind, seed: int) -> dict[str, tuple]:
+    """The mean path (R, 3) with its covariances (R, 3, 3) and the best particle's path (R, 3, no
+    covariance) of one filter run over every record of ``run``."""
+    if kind == MapKind.GRID:
+        result = grid_on_run(run, dataclasses.replace(config, grid=dataclasses.replace(config.grid, seed=seed)))
+        return {
+            "mean": result.record_trajectory(run.log, run.start_pose, which="mean"),
+            "best": (result.record_trajectory(run.log, run.start_pose)[0], None),
+        }
+    corners = dataclasses.replace(config, fastslam=dataclasses.replace(config.fastslam, seed=seed))
+    result = slam_on_run(run, corners, progress=False)
+    return {"mean": (result.mean_poses, result.pose_covariances), "best": (result.best_poses, None)}
+
+
+def rows_for(run: LoadedRun, config: SlamConfig, log_name: str, seeds) -> list[dict]:
+    """One row per filter, seed and path: sharpness and extent; with truth ATE and NEES too."""
+    tolerance = config.odometry.jump_tolerance
+    reckoned = dead_reckoning_without_glitches(run, tolerance)
+    rows = []
+    for kind in (MapKind.GRID, MapKind.LANDMARKS):
+        for seed in seeds:
+            for path_name, (poses, covariances) in estimate(run, config, kind, seed).items():
+                sharp = map_sharpness(run, poses, tolerance)
+                row = {"log": log_name, "filter": FILTER_NAMES[kind], "seed": seed, "path": path_name}
+                row |= {"sharpness_ratio": sharp.ratio, "extent_ratio": sharp.extent_ratio}
+                if run.truth is not None:
+                    row["ate_rmse_m"] = absolute_trajectory_error(poses, run.truth)["rmse"]
+                    row["dead_reckoning_ate_rmse_m"] = absolute_trajectory_error(reckoned, run.truth)["rmse"]
+                    row["true_extent_ratio"] = path_extent(run.truth) / sharp.dead_reckoning_extent_m
+                    if covariances is not None:
+                        moved = np.flatnonzero(np.linalg.det(covariances) > 0)  # before the first scan: no spread
+                        nees = normalized_estimation_error(poses[moved], covariances[moved], run.truth[moved])
+                        row["nees_median"] = nees_summary(nees)["median"]
+                rows.append(row)
+                pd.DataFrame([row]).to_csv(TABLE, mode="a", header=not TABLE.exists(), index=False)
+                print(row, flush=True)
+    return rows
+
+
+def summary(table: pd.DataFrame) -> pd.DataFrame:
+    """Per log, filter and path: the median and the worst (largest) value over the filter seeds."""
+    values = [c for c in table.columns if c not in ("log", "filter", "seed", "path")]
+    grouped = table.groupby(["log", "filter", "path"], sort=False)[values]
+    return grouped.median().add_suffix(" (median)").join(grouped.max().add_suffix(" (worst)"))
+
+
+def main() -> None:
+    config = load_slam_config(COURSE)
+    TABLE.unlink(missing_ok=True)
+    rows = []
+    if LOG1.exists():
+        run = load_run(LOG1, config.sensor)
+        geometry, origin = detected_geometry(run, config.corners.min_range, config.corners.max_range)
+        run = dataclasses.replace(run, geometry=geometry, geometry_origin=origin)
+        rows += rows_for(run, config, "log1", FILTER_SEEDS)
+    else:
+        print(f"{LOG1} is absent: log1 left out", file=sys.stderr)
+    folder = HERE / "simulated"
+    folder.mkdir(exist_ok=True)
+    for seed in SIMULATION_SEEDS:
+        path = folder / f"course_sim_{seed}.log"
+        simulate(path, load_config(SIMULATION), seed=seed, progress=False)
+        rows += rows_for(load_run(path), config, f"simulated seed {seed}", [0])
+    table = summary(pd.DataFrame(rows))
+    (HERE / "filters.md").write_text(table.to_markdown(floatfmt=".3f") + "\n")
+
+
+if __name__ == "__main__":
+    main()
