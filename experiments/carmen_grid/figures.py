@@ -1,40 +1,79 @@
-"""Each log's grid map (results/<log>_seed0/occupancy.png) beside the log's own picture
-(shared/data/carmen/<log>-corrected.png), both scaled to 700 pixels: results/<log>_compare.png.
+"""Each log's grid map (results/<log>_seed0/occupancy.png with its .yaml) beside the log's own
+picture (shared/data/carmen/<log>-corrected.png): results/<log>_compare.png.
 
-Run after run.py: ``python experiments/carmen_grid/figures.py``.
+Run after run.py: ``python experiments/carmen_grid/figures.py``. Ours is drawn in the filter's frame
+(metres, from the map's resolution and origin), so rotated by the start heading; the log's picture
+is in its own pixels (it comes without a scale).
 """
 
 from __future__ import annotations
 
-import cv2
-import numpy as np
-from run import CARMEN, LOGS, RESULTS
+import matplotlib
 
-SIZE = 700
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+import yaml  # noqa: E402
+from matplotlib.patches import Patch  # noqa: E402
+from run import CARMEN, LOGS, RESULTS  # noqa: E402
+
+PIXELS = 600  # the longer side of each panel's image: larger maps are shrunk to it
 
 
-def scaled(image: np.ndarray) -> np.ndarray:
-    """``image`` (grey) scaled so that its longer side is ``SIZE`` pixels."""
-    factor = SIZE / max(image.shape)
-    return cv2.resize(image, None, fx=factor, fy=factor, interpolation=cv2.INTER_AREA)
+def shrunk(image: np.ndarray) -> tuple[np.ndarray, int]:
+    """A grey ``image`` shrunk by a whole factor to at most ``PIXELS`` on its longer side, each new
+    pixel the darkest of its block (so one-cell walls stay visible); the image and the factor."""
+    grey = image[..., 0] if image.ndim == 3 else image
+    factor = max(1, int(np.ceil(max(grey.shape) / PIXELS)))
+    rows, cols = (-grey.shape[0]) % factor, (-grey.shape[1]) % factor
+    padded = np.pad(grey, ((0, rows), (0, cols)), mode="edge")
+    blocks = padded.reshape(padded.shape[0] // factor, factor, padded.shape[1] // factor, factor)
+    return blocks.min(axis=(1, 3)), factor
 
 
-def side_by_side(left: np.ndarray, right: np.ndarray) -> np.ndarray:
-    """Two grey images next to each other on a grey background, 10 pixels apart."""
-    height = max(left.shape[0], right.shape[0])
-    pad = [np.pad(image, ((0, height - image.shape[0]), (0, 10)), constant_values=128) for image in (left, right)]
-    return np.hstack(pad)
+def compare(name: str) -> None:
+    folder = RESULTS / f"{name}_seed0"
+    ours, factor = shrunk(plt.imread(folder / "occupancy.png"))
+    meta = yaml.safe_load((folder / "occupancy.yaml").read_text())
+    resolution, (x0, y0, _) = meta["resolution"], meta["origin"]
+    height, width = ours.shape[0] * factor, ours.shape[1] * factor
+    fig, (left, right) = plt.subplots(1, 2, figsize=(12, 6), layout="constrained")
+    left.imshow(
+        ours,
+        cmap="gray",
+        vmin=0,
+        vmax=1,
+        interpolation="nearest",
+        extent=(x0, x0 + width * resolution, y0, y0 + height * resolution),
+    )
+    left.set_xlabel("x [m]")
+    left.set_ylabel("y [m]")
+    left.set_title(f"grid FastSLAM map, seed 0 ({resolution:g} m cells, filter frame)", fontsize=10)
+    picture, shrink = shrunk(plt.imread(CARMEN / f"{name}-corrected.png"))
+    right.imshow(
+        picture,
+        cmap="gray",
+        interpolation="nearest",
+        extent=(0, picture.shape[1] * shrink, picture.shape[0] * shrink, 0),
+    )
+    right.set_xlabel("x [pixels]")
+    right.set_ylabel("y [pixels]")
+    right.set_title("the map picture that comes with the log (its own pixels)", fontsize=10)
+    legend = [
+        Patch(facecolor="black", label="occupied"),
+        Patch(facecolor="white", edgecolor="0.5", label="free"),
+        Patch(facecolor=(0.8, 0.8, 0.8), label="unknown"),
+    ]
+    fig.legend(handles=legend, loc="outside lower center", ncol=3, fontsize=9)
+    fig.suptitle(f"{name}: our occupancy grid beside the log's reference map", fontsize=11)
+    fig.savefig(RESULTS / f"{name}_compare.png", dpi=110)
+    plt.close(fig)
 
 
 def main() -> None:
     for name in LOGS:
-        ours = RESULTS / f"{name}_seed0" / "occupancy.png"
-        if ours.exists():
-            figure = side_by_side(
-                scaled(cv2.imread(str(ours), cv2.IMREAD_GRAYSCALE)),
-                scaled(cv2.imread(str(CARMEN / f"{name}-corrected.png"), cv2.IMREAD_GRAYSCALE)),
-            )
-            cv2.imwrite(str(RESULTS / f"{name}_compare.png"), figure)
+        if (RESULTS / f"{name}_seed0" / "occupancy.png").exists():
+            compare(name)
 
 
 if __name__ == "__main__":
