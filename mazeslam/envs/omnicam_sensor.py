@@ -8,12 +8,16 @@ is read back from the first dark pixel outward, so what the sensor reports is
     d'   = h tan(rho' / alpha)
 
 with Gaussian edge noise in pixels (blur, lighting, a wall's uneven edge); beams in sectors the
-mirror's supports hide report nothing. A pixel covers
-dd/drho = h / alpha sec^2(rho / alpha) metres of floor, which grows with distance: about 2 mm at
-0.1 m, 4 mm at 0.2 m and 8 mm at 0.3 m for the exercise's mirror (h 0.126 m, alpha 107 px/rad), so
-the range error grows with distance as the real sensor's does. The mirror's constants are those of
-``CameraCalibration``; the ring's radii are the laser's ``min_range`` and ``max_range`` (metres), which
-``VirtualLaser`` applies to the reported ranges.
+mirror's supports hide report nothing. A pixel covers dd/drho = h / alpha sec^2(rho / alpha) metres
+of floor, which grows with distance: about 2 mm at 0.1 m, 4 mm at 0.2 m and 8 mm at 0.3 m for the
+exercise's mirror (h 0.126 m, alpha 107 px/rad), so the range error grows with distance as the real
+sensor's does. The mirror's constants are those of ``CameraCalibration``; the ring's radii are the
+laser's ``min_range`` and ``max_range`` (metres), which ``VirtualLaser`` applies to the reported
+ranges.
+
+Not modelled: log1's walls also bend by a few millimetres over many neighbouring beams
+(experiments/course_robot/sensor_comparison.md); here the walls are straight and the noise is
+independent from beam to beam.
 """
 
 from __future__ import annotations
