@@ -61,17 +61,20 @@ def draw_walls(ax, walls: np.ndarray | None, colour="0.6", linewidth: float = 1.
     ax.autoscale_view()
 
 
-def draw_ellipses(ax, means: np.ndarray, covariances: np.ndarray, sigmas: float = 2.0, colour="tab:purple") -> None:
-    """The ``sigmas``-sigma ellipses of 2-D Gaussians (L, 2), (L, 2, 2) as one collection."""
+def draw_ellipses(
+    ax, means: np.ndarray, covariances: np.ndarray, sigmas: float = 2.0, colour="tab:purple"
+) -> EllipseCollection | None:
+    """The ``sigmas``-sigma ellipses of 2-D Gaussians (L, 2), (L, 2, 2) as one collection (returned;
+    None when there are none)."""
     means = np.asarray(means, float).reshape(-1, 2)
     if not len(means):
-        return
+        return None
     values, vectors = np.linalg.eigh(np.asarray(covariances, float).reshape(-1, 2, 2))
     # eigh sorts ascending: the major axis is the last eigenvector.
     angles = np.degrees(np.arctan2(vectors[:, 1, 1], vectors[:, 0, 1]))
     widths = 2 * sigmas * np.sqrt(np.maximum(values[:, 1], 0))
     heights = 2 * sigmas * np.sqrt(np.maximum(values[:, 0], 0))
-    ax.add_collection(
+    return ax.add_collection(
         EllipseCollection(
             widths,
             heights,

@@ -15,9 +15,10 @@ from pathlib import Path
 
 import matplotlib.pyplot as plt
 import numpy as np
-from matplotlib.collections import LineCollection
+from matplotlib.collections import EllipseCollection, LineCollection
 from matplotlib.patches import Ellipse
 
+from mazeslam.evaluation.plots import draw_ellipses
 from mazeslam.geometry import transform_points
 
 #: ``scan_at(record index) -> (scan points (K, 2), corners (C, 2))`` in the world frame.
@@ -64,7 +65,7 @@ class SlamView:
         )[0]
         self.particles = ax.plot([], [], ".", color="red", markersize=3, label="particles")[0]
         self.landmarks = ax.plot([], [], "+", color="tab:purple", markersize=8, label="map (best particle)")[0]
-        self.ellipses: list = []
+        self.ellipses: EllipseCollection | None = None  # one collection, replaced each frame
         low, high = extent
         ax.set_xlim(low[0], high[0])
         ax.set_ylim(low[1], high[1])
@@ -93,13 +94,9 @@ class SlamView:
         self.particles.set_data(particles[:, 0], particles[:, 1])
         landmarks = np.asarray(landmarks).reshape(-1, 2)
         self.landmarks.set_data(landmarks[:, 0], landmarks[:, 1])
-        for ellipse in self.ellipses:
-            ellipse.remove()
-        self.ellipses = (
-            []
-            if covariances is None
-            else [self.ax.add_patch(ellipse_of(mean, covariance)) for mean, covariance in zip(landmarks, covariances)]
-        )
+        if self.ellipses is not None:
+            self.ellipses.remove()
+        self.ellipses = None if covariances is None else draw_ellipses(self.ax, landmarks, covariances)
         points, corners = self.scan_at(index) if self.scan_at is not None else (np.empty((0, 2)), np.empty((0, 2)))
         self.scan_points.set_data(points[:, 0], points[:, 1])
         self.corners.set_data(corners[:, 0], corners[:, 1])
