@@ -206,16 +206,45 @@ def run_id(sweep: Sweep, run: dict) -> str:
     return hashlib.sha1(text.encode()).hexdigest()[:16]
 
 
-def execute_run(sweep: Sweep, run: dict, maps_folder: str | None = None) -> dict:
-    """Simulate, map and score one run; returns its row (settings, seed, metrics). Runs in a worker."""
+def simulation_key(sweep: Sweep, run: dict) -> str:
+    """A stable name for a run's simulation: a hash of the simulator settings, maze, seed and
+    duration. Runs that differ only in filter settings share it (the core grid: 27 cells, one log
+    per seed)."""
+    simulation_config, _ = configure(sweep, run["settings"])
+    identity = {
+        "simulation": dataclasses.asdict(simulation_config),
+        "maze": sweep.maze,
+        "seed": run["seed"],
+        "duration": sweep.duration,
+    }
+    return hashlib.sha1(json.dumps(identity, sort_keys=True, default=str).encode()).hexdigest()[:16]
+
+
+def simulate_run(sweep: Sweep, run: dict, logs_folder: str) -> str:
+    """Simulate ``run``'s log (with sidecars) into ``logs_folder``/<simulation key>/ and return
+    the key. Runs in a worker."""
+    simulation_config, _ = configure(sweep, run["settings"])
+    key = simulation_key(sweep, run)
+    simulate(
+        Path(logs_folder, key, "run.log"), simulation_config, sweep.maze, run["seed"], sweep.duration, progress=False
+    )
+    return key
+
+
+def execute_run(sweep: Sweep, run: dict, maps_folder: str | None = None, logs_folder: str | None = None) -> dict:
+    """Simulate (or, with ``logs_folder``, read the log ``simulate_run`` wrote there), map and
+    score one run; returns its row (settings, seed, metrics). Runs in a worker."""
     simulation_config, slam_config = configure(sweep, run["settings"])
     seed = run["seed"]
     slam_config = dataclasses.replace(slam_config, fastslam=dataclasses.replace(slam_config.fastslam, seed=seed))
-    with tempfile.TemporaryDirectory() as folder:
-        simulated = simulate(
-            Path(folder) / "run.log", simulation_config, sweep.maze, seed, sweep.duration, progress=False
-        )
-        loaded = load_run(simulated.log_path, slam_config.sensor)
+    if logs_folder is not None:
+        loaded = load_run(Path(logs_folder, simulation_key(sweep, run), "run.log"), slam_config.sensor)
+    else:
+        with tempfile.TemporaryDirectory() as folder:
+            simulated = simulate(
+                Path(folder) / "run.log", simulation_config, sweep.maze, seed, sweep.duration, progress=False
+            )
+            loaded = load_run(simulated.log_path, slam_config.sensor)
     started = time.perf_counter()
     result = slam_on_run(loaded, slam_config, progress=False)
     seconds = time.perf_counter() - started
@@ -423,25 +452,45 @@ class SweepLock:
 
 
 def _execute(sweep: Sweep, runs: list[dict], maps_folder: str, workers: int | None, scheduler: str | None):
-    """Yield rows as runs finish, on local processes or a Dask cluster."""
+    """Yield rows as runs finish, on local processes or a Dask cluster.
+
+    Locally, the distinct simulations are run first (in parallel), then the filter runs on the
+    logs they wrote, the most particles first (the longest runs do not trail at the end, one
+    worker busy and the others idle). A Dask cluster's workers may not share a disk: there each
+    run simulates its own log."""
     if not runs:
         return
     if scheduler:
-        from distributed import Client
-        from distributed import as_completed as dask_completed
-
-        with Client(scheduler) as client:
-            futures = [client.submit(execute_run, sweep, run, maps_folder, pure=False) for run in runs]
-            for future in dask_completed(futures):
-                yield future.result()
+        yield from _on_dask(scheduler, execute_run, [(sweep, run, maps_folder) for run in runs])
         return
+    runs = sorted(runs, key=lambda run: -configure(sweep, run["settings"])[1].fastslam.NPARTICLES)
+    with tempfile.TemporaryDirectory() as logs:
+        distinct = list({simulation_key(sweep, run): run for run in runs}.values())
+        for _ in _locally(workers, simulate_run, [(sweep, run, logs) for run in distinct]):
+            pass
+        yield from _locally(workers, execute_run, [(sweep, run, maps_folder, logs) for run in runs])
+
+
+def _locally(workers: int | None, function, calls: list[tuple]):
+    """``function(*arguments)`` for each of ``calls``, results yielded as they finish: in this
+    process for one worker, else on ``workers`` processes (default: one per core)."""
     if workers == 1:
-        for run in runs:
-            yield execute_run(sweep, run, maps_folder)
+        for arguments in calls:
+            yield function(*arguments)
         return
     with ProcessPoolExecutor(max_workers=workers) as pool:
-        futures = [pool.submit(execute_run, sweep, run, maps_folder) for run in runs]
-        for future in as_completed(futures):
+        for future in as_completed([pool.submit(function, *arguments) for arguments in calls]):
+            yield future.result()
+
+
+def _on_dask(scheduler: str, function, calls: list[tuple]):
+    """``function(*arguments)`` for each of ``calls`` on the Dask cluster at ``scheduler``."""
+    from distributed import Client
+    from distributed import as_completed as dask_completed
+
+    with Client(scheduler) as client:
+        futures = [client.submit(function, *arguments, pure=False) for arguments in calls]
+        for future in dask_completed(futures):
             yield future.result()
 
 
