@@ -55,9 +55,9 @@ def run_grid_command(run: LoadedRun, config: SlamConfig, out_dir: Path, progress
         "best_trajectory": out_dir / "best_trajectory.csv",
         "map": out_dir / "map.json",
     }
-    mean, covariances = result.record_trajectory(run.log, run.start_pose, which="mean")
+    mean, covariances = result.record_trajectory(which="mean")
     sidecars.write_trajectory(paths["trajectory"], run.log.times, mean, covariances)
-    best = result.record_trajectory(run.log, run.start_pose)[0]
+    best = result.record_trajectory()[0]
     sidecars.write_truth(paths["best_trajectory"], run.log.times, best)
     duration, seconds = run.log.duration, result.total_seconds
     lines = [

@@ -20,7 +20,7 @@ def test_the_course_config_beats_dead_reckoning_on_a_simulated_course_robot_log(
     config = load_slam_config(PROJECT_ROOT / "configs" / "course.toml")
     config = dataclasses.replace(config, grid=dataclasses.replace(config.grid, particles=10))
     result = grid_on_run(loaded, config)
-    mean = result.record_trajectory(loaded.log, loaded.start_pose, which="mean")[0]
+    mean = result.record_trajectory(which="mean")[0]
     reckoned = dead_reckoning_without_glitches(loaded, config.odometry.jump_tolerance)
     assert loaded.truth is not None
     filter_error = absolute_trajectory_error(mean, loaded.truth)["rmse"]

@@ -7,7 +7,7 @@ import pytest
 from mazeslam.config import from_mapping
 from mazeslam.evaluation.metrics import absolute_trajectory_error, align_se2, apply_se2
 from mazeslam.filters.motion import dead_reckoning
-from mazeslam.geometry import relative
+from mazeslam.geometry import compose, relative
 from mazeslam.grid import GridSlamParams, run_grid_slam
 from mazeslam.grid.filter import scan_motions
 from mazeslam.grid.map_io import OCCUPIED, grid_states
@@ -54,10 +54,16 @@ def test_the_best_map_lies_on_the_walls(building):
 
 def test_the_trajectory_has_a_row_per_record(building):
     simulated, course_log, result = building
-    poses, covariances = result.record_trajectory(course_log, simulated.start_pose)
+    poses, covariances = result.record_trajectory()
     assert poses.shape == (len(course_log), 3) and covariances.shape == (len(course_log), 3, 3)
     np.testing.assert_allclose(poses[result.scan_records], result.best_poses)
-    np.testing.assert_allclose(poses[0], simulated.start_pose)  # before the first scan
+    reckoned = dead_reckoning(course_log, simulated.start_pose)
+    first = result.scan_records[0]
+    np.testing.assert_allclose(poses[:first], reckoned[:first])  # before the first scan: the odometry from the start
+    between = result.scan_records[1] - 1  # the record before the second scan: the first scan's pose moved on
+    assert between > first
+    moved_on = compose(result.best_poses[0], relative(reckoned[first], reckoned[between]))
+    np.testing.assert_allclose(poses[between], moved_on, atol=1e-12)
     assert result.processed[0] and result.processed.sum() < len(result.processed) + 1
 
 

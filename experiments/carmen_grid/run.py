@@ -50,7 +50,7 @@ def run_one(job: tuple[str, int]) -> dict:
     out = RESULTS / f"{name}_seed{seed}"
     out.mkdir(parents=True, exist_ok=True)
     write_map(grid_states(result.grid), out)
-    poses, covariances = result.record_trajectory(run.log, run.start_pose)
+    poses, covariances = result.record_trajectory()
     write_trajectory(out / "trajectory.csv", run.log.times, poses, covariances)
     return {
         "log": name,

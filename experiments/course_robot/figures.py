@@ -46,7 +46,7 @@ def paths_of(run: LoadedRun, config: SlamConfig) -> dict:
     return {
         "dead reckoning": reckoned,
         "corner FastSLAM (mean)": slam_on_run(run, config, progress=False).mean_poses,
-        "grid filter (mean)": grid.record_trajectory(run.log, run.start_pose, which="mean")[0],
+        "grid filter (mean)": grid.record_trajectory(which="mean")[0],
     }
 
 

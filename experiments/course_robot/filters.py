@@ -49,8 +49,8 @@ def estimate(run: LoadedRun, config: SlamConfig, kind: MapKind, seed: int) -> di
     if kind == MapKind.GRID:
         result = grid_on_run(run, dataclasses.replace(config, grid=dataclasses.replace(config.grid, seed=seed)))
         return {
-            "mean": result.record_trajectory(run.log, run.start_pose, which="mean"),
-            "best": (result.record_trajectory(run.log, run.start_pose)[0], None),
+            "mean": result.record_trajectory(which="mean"),
+            "best": (result.record_trajectory()[0], None),
         }
     corners = dataclasses.replace(config, fastslam=dataclasses.replace(config.fastslam, seed=seed))
     result = slam_on_run(run, corners, progress=False)

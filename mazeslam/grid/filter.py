@@ -39,7 +39,7 @@ from tqdm.auto import tqdm
 from mazeslam.beams import BeamGeometry
 from mazeslam.config import require
 from mazeslam.filters.correlative import CorrelativeParams, LikelihoodGrid, correlative_candidates
-from mazeslam.filters.motion import OdometryNoise, predict_relative
+from mazeslam.filters.motion import OdometryNoise, dead_reckoning, predict_relative
 from mazeslam.filters.resampling import effective_sample_size, normalized_weights, systematic_resample
 from mazeslam.filters.scan_matching import ScanMatchParams, laser_odometry, wheel_motion
 from mazeslam.geometry import compose, relative, transform_points, wrap_angle
@@ -296,6 +296,8 @@ class GridSlamResult:
         peak_map_bytes: the most bytes of cells all particles' maps held together after a scan
             (shared tiles counted once).
         particles: the final cloud (for inspection).
+        reckoned: (R, 3) the odometry the filter moved by, integrated from ``reckoned_start`` (3,)
+            at every record: what carries a scan's pose on to the records after it.
     """
 
     scan_records: np.ndarray
@@ -312,6 +314,8 @@ class GridSlamResult:
     motion_seconds: float
     peak_map_bytes: int
     particles: GridSlam
+    reckoned: np.ndarray
+    reckoned_start: np.ndarray
 
     @property
     def resamplings(self) -> int:
@@ -321,15 +325,19 @@ class GridSlamResult:
     def total_seconds(self) -> float:
         return float(self.seconds.sum() + self.motion_seconds)
 
-    def record_trajectory(
-        self, course_log: CourseLog, start_pose, which: str = "best"
-    ) -> tuple[np.ndarray, np.ndarray]:
-        """Poses (R, 3) and covariances (R, 3, 3) at every record of ``course_log``, as
-        ``sidecars.write_trajectory`` takes them: a record keeps the pose of the last scan at or
-        before it (``start_pose`` and zero covariance before the first). ``which``: "best" or "mean"."""
+    def record_trajectory(self, which: str = "best") -> tuple[np.ndarray, np.ndarray]:
+        """Poses (R, 3) and covariances (R, 3, 3) at every record of the log, as
+        ``sidecars.write_trajectory`` takes them: a record gets the pose of the last scan at or
+        before it moved on by the odometry since (the start pose moved so before the first scan, with
+        zero covariance), the covariance of that scan. ``which``: "best" or "mean"."""
         scan_poses = {"best": self.best_poses, "mean": self.mean_poses}[which]
-        latest = np.searchsorted(self.scan_records, np.arange(len(course_log)), side="right") - 1
-        poses = np.where(latest[:, None] >= 0, scan_poses[np.maximum(latest, 0)], np.asarray(start_pose, float))
+        latest = np.searchsorted(self.scan_records, np.arange(len(self.reckoned)), side="right") - 1
+        scanned = latest[:, None] >= 0
+        anchor = np.where(scanned, scan_poses[np.maximum(latest, 0)], self.reckoned_start)
+        reckoned_anchor = np.where(
+            scanned, self.reckoned[self.scan_records[np.maximum(latest, 0)]], self.reckoned_start
+        )
+        poses = compose(anchor, relative(reckoned_anchor, self.reckoned))
         covariances = np.where(latest[:, None, None] >= 0, self.covariances[np.maximum(latest, 0)], 0.0)
         return poses, covariances
 
@@ -393,6 +401,8 @@ def run_grid_slam(
         motion_seconds,
         peak_map_bytes,
         slam,
+        dead_reckoning(course_log, start_pose),
+        np.asarray(start_pose, dtype=float),
     )
 
 
