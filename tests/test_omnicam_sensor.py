@@ -97,7 +97,7 @@ def test_course_robot_config_simulates_a_log_that_round_trips(tmp_path):
     np.testing.assert_allclose(times, course_log.times)
     np.testing.assert_allclose(truth, result.poses, atol=1e-6)  # written to 6 decimals
     geometry = sidecars.beam_geometry(world["sensor"])
-    assert geometry.first_beam_angle == 0.0 and geometry.mount_x == 0.0
+    assert geometry.first_beam_angle == 0.0 and geometry.mount_x == config.laser.geometry.mount_x
     assert world["sensor"]["model"] == "omnicam"
     assert world["sensor"]["omnicam"]["occluded"] == [[59, 59], [258, 266], [295, 296]]
     scans = course_log.scans

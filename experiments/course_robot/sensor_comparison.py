@@ -3,8 +3,8 @@
     python experiments/course_robot/sensor_comparison.py [--log1 ../shared/data/course/log1.txt]
 
 (about half a minute). Simulates configs/simulation_course_robot.toml with seeds 101-103 (seeds not
-meant for choosing filter settings) and measures, on them and on log1 (beam 0 forward, sensor on
-the axle, as configs/course.toml reads it):
+meant for choosing filter settings) and measures, on them and on log1 (beam 0 forward, the sensor
+where configs/course.toml's ``[sensor]`` puts it):
 
 - **wall scatter** near 0.1, 0.2 and 0.3 m (points within +-0.025 m of that range): the RMS distance
   of the scan points to the straight line fitted through their wall (the split-and-merge lines of
@@ -49,6 +49,9 @@ TABLE_RANGES, HALF_BIN = (0.1, 0.2, 0.3), 0.025
 FIGURE_RANGES = np.round(np.arange(0.125, 0.426, 0.05), 3)
 #: Fewest points for a scatter figure.
 MIN_POINTS = 30
+#: A return nearer than this (m) beside a run of beams without one: that run's wall is inside the
+#: camera's blind disc (the ring starts at 0.11 m).
+NEAR_WALL = 0.14
 #: log1's first scans, taken before the robot moves (its odometry is 0 until 6.3 s).
 LOG1_STANDING_SCANS = 8
 
@@ -126,11 +129,74 @@ def measure(name: str, run: LoadedRun) -> tuple[dict, WallPoints, np.ndarray]:
     points = wall_points(scans, line_extractor(run))
     corners = CornerExtractor(run.geometry, run.log.n_beams, load_slam_config(COURSE).corners)
     per_scan = np.array([len(corners.extract(scan).observations) for scan in scans])
-    row = {"log": name, "scans": len(scans), "no_return": float(np.mean(scans == 0))}
+    row = {
+        "log": name,
+        "scans": len(scans),
+        "no_return": float(np.mean(scans == 0)),
+        "no_return_beside_near_wall": float(np.mean(beside_near_wall(scans))),
+    }
     for centre in TABLE_RANGES:
         row.update({f"{key}_{centre:g}m": value for key, value in points.scatter(centre).items()})
-    row.update({"corners_per_scan": float(per_scan.mean()), "scans_without_corner": float(np.mean(per_scan == 0))})
+    row.update(
+        {
+            "corners_per_scan": float(per_scan.mean()),
+            "scans_without_corner": float(np.mean(per_scan == 0)),
+            "scans_with_two_corners": float(np.mean(per_scan >= 2)),
+        }
+    )
     return row, points, per_scan
+
+
+def beside_near_wall(scans: np.ndarray) -> np.ndarray:
+    """(S, N) True for the beams without a return whose run of such beams (neighbouring beams,
+    around the circle) has a return nearer than ``NEAR_WALL`` m at either end: most likely a wall
+    inside the camera's blind disc."""
+    marked = np.zeros(scans.shape, dtype=bool)
+    for row, scan in enumerate(scans):
+        if not (scan > 0).any():
+            continue
+        shift = int(np.argmax(scan > 0))  # rolled to start at a return, no run wraps around the end
+        rolled = np.roll(scan, -shift)
+        edges = np.diff(np.concatenate([[0], (rolled == 0).astype(int), [0]]))
+        for first, end in zip(np.flatnonzero(edges == 1), np.flatnonzero(edges == -1)):
+            if min(rolled[first - 1], rolled[end % len(rolled)]) < NEAR_WALL:
+                marked[row, (np.arange(first, end) + shift) % len(rolled)] = True
+    return marked
+
+
+def standing_noise(run: LoadedRun, scans: int) -> dict:
+    """log1's edge noise from its first ``scans`` scans, taken standing still: per beam (returns in
+    every scan, spread at most 3 px: one surface), the variance of its whole-pixel radius from scan
+    to scan, pooled (px^2) overall and as an RMS standard deviation (px) per range band; and the
+    edge noise (px) whose Gaussian, rounded to whole pixels, varies as much (``rounded_variance``)."""
+    mirror = CameraCalibration(center_x=0.0, center_y=0.0, inner_radius=0.0, outer_radius=1.0)
+    still = run.log.scans[:scans]
+    seen = (still > 0).all(axis=0)
+    rho = mirror.radius(still[:, seen])
+    one_surface = np.ptp(rho, axis=0) <= 3
+    variance = rho[:, one_surface].var(axis=0, ddof=1)
+    distance = np.median(still[:, seen][:, one_surface], axis=0)
+    bands = {"0.10-0.15 m": (0.10, 0.15), "0.15-0.25 m": (0.15, 0.25)}
+    sigmas = np.arange(0.2, 0.81, 0.01)
+    matched = sigmas[np.argmin(np.abs([rounded_variance(sigma, scans) for sigma in sigmas] - variance.mean()))]
+    return {
+        "variance_px2": float(variance.mean()),
+        "edge_noise_px": float(matched),
+        **{
+            band: float(np.sqrt(variance[(distance >= lo) & (distance < hi)].mean()))
+            for band, (lo, hi) in bands.items()
+        },
+    }
+
+
+def rounded_variance(sigma: float, samples: int, beams: int = 20_000) -> float:
+    """The mean scan-to-scan variance (px^2) of ``samples`` readings of a beam whose edge has
+    Gaussian noise ``sigma`` (px) and is read to whole pixels, over ``beams`` random sub-pixel
+    positions (seeded), keeping the beams whose readings spread at most 3 px (as ``standing_noise``)."""
+    rng = np.random.default_rng(0)
+    readings = np.floor(rng.random(beams) + rng.normal(0.0, sigma, (samples, beams)))
+    kept = np.ptp(readings, axis=0) <= 3
+    return float(readings[:, kept].var(axis=0, ddof=1).mean())
 
 
 def reread(scans: np.ndarray, offset_px: np.ndarray) -> np.ndarray:
@@ -238,12 +304,14 @@ def table_markdown(table: pd.DataFrame) -> str:
     rows = {
         "scans": ("scans", "{:.0f}"),
         "share of beams without a return": ("no_return", "{:.3f}"),
+        f"... beside a return nearer than {NEAR_WALL} m": ("no_return_beside_near_wall", "{:.3f}"),
         **{f"points near {c:g} m": (f"points_{c:g}m", "{:.0f}") for c in TABLE_RANGES},
         **{f"wall scatter at {c:g} m [mm]": (f"rms_mm_{c:g}m", "{:.2f}") for c in TABLE_RANGES},
         **{f"beam-to-beam part at {c:g} m [mm]": (f"beam_to_beam_mm_{c:g}m", "{:.2f}") for c in TABLE_RANGES},
         **{f"neighbour correlation at {c:g} m": (f"neighbour_correlation_{c:g}m", "{:.2f}") for c in TABLE_RANGES},
         "corners per scan": ("corners_per_scan", "{:.2f}"),
         "share of scans without a corner": ("scans_without_corner", "{:.2f}"),
+        "share of scans with two or more": ("scans_with_two_corners", "{:.2f}"),
     }
     lines = ["| measure | " + " | ".join(logs.index) + " |", "|---|" + "---:|" * len(logs)]
     for label, (column, form) in rows.items():
@@ -252,9 +320,10 @@ def table_markdown(table: pd.DataFrame) -> str:
     return "\n".join(lines)
 
 
-def summary(table: pd.DataFrame, distortion: dict, fixed: dict[str, dict]) -> str:
-    """The markdown report: the table, then what differs (numbers from the table, from
-    ``straightest_bearing_distortion`` on log1 and from ``camera_fixed_pattern`` per log)."""
+def summary(table: pd.DataFrame, distortion: dict, fixed: dict[str, dict], standing: dict) -> str:
+    """The markdown report: the table, then what differs (numbers from the table, and on log1 from
+    ``straightest_bearing_distortion``, ``camera_fixed_pattern`` (also on a simulated log) and
+    ``standing_noise``)."""
     gain = 1 - distortion["best_rms_mm"] / distortion["rms_mm"]
     log1 = table.set_index("log").loc["log1"]
     simulated = table[table["log"] != "log1"].drop(columns="log").mean()
@@ -265,7 +334,7 @@ def summary(table: pd.DataFrame, distortion: dict, fixed: dict[str, dict]) -> st
 
     return f"""# The simulated course robot's scans beside log1's
 
-`python experiments/course_robot/sensor_comparison.py`: log1 (beam 0 forward, sensor on the axle) and
+`python experiments/course_robot/sensor_comparison.py`: log1 (beam 0 forward) and
 configs/simulation_course_robot.toml with seeds {", ".join(map(str, SEEDS))}. **Wall scatter**: RMS
 distance of the scan points within +-{HALF_BIN} m of the range to the straight line fitted through
 their wall (configs/course.toml's split-and-merge, every bearing, 0.05-0.45 m). **Beam-to-beam
@@ -282,14 +351,17 @@ independent noise; near 1: the wall bends). **Corners**: configs/course.toml's `
 
 - **The noise from one beam to the next agrees; the walls' bends do not.** The beam-to-beam part is
   {pair("beam_to_beam_mm_0.2m")} mm at 0.2 m and {pair("beam_to_beam_mm_0.3m")} mm at 0.3 m: the
-  edge noise (0.35 px, measured on log1's standing-still scans, not fitted to these numbers) and
-  whole pixels give log1's independent noise. But log1's distances to the line are correlated
-  between neighbouring beams ({pair("neighbour_correlation_0.2m", 2)} at 0.2 m): its walls bend by a
-  few millimetres over many beams, which the simulator's straight walls and independent noise do
-  not reproduce, so log1's total scatter is higher: {pair("rms_mm_0.2m")} mm at 0.2 m,
-  {pair("rms_mm_0.3m")} mm at 0.3 m. A filter must not take the real sensor's neighbouring beams as
-  independent; on simulated logs it sees walls {log1["rms_mm_0.2m"] - simulated["rms_mm_0.2m"]:.1f} mm
-  (0.2 m) to {log1["rms_mm_0.3m"] - simulated["rms_mm_0.3m"]:.1f} mm (0.3 m) straighter, in RMS, than log1's.
+  edge noise and whole pixels give log1's independent noise. The edge noise is measured, not fitted
+  to these numbers: on log1's first {LOG1_STANDING_SCANS} scans, taken standing still, a beam's
+  whole-pixel reading varies by {standing["variance_px2"]:.2f} px^2 from scan to scan, as a
+  {standing["edge_noise_px"]:.2f} px Gaussian edge's does after rounding (the config: 0.35 px).
+  But log1's distances to the line are correlated between neighbouring beams
+  ({pair("neighbour_correlation_0.2m", 2)} at 0.2 m): its walls bend by a few millimetres over many
+  beams, which the simulator's straight walls and independent noise do not reproduce, so log1's
+  total scatter is higher: {pair("rms_mm_0.2m")} mm at 0.2 m, {pair("rms_mm_0.3m")} mm at 0.3 m. A
+  filter must not take the real sensor's neighbouring beams as independent; on simulated logs it
+  sees walls {log1["rms_mm_0.2m"] - simulated["rms_mm_0.2m"]:.1f} mm (0.2 m) to
+  {log1["rms_mm_0.3m"] - simulated["rms_mm_0.3m"]:.1f} mm (0.3 m) straighter, in RMS, than log1's.
 - **The bends are not a distortion fixed to the camera** that this simulator could add:
   - a pixel offset a cos(k phi) + b sin(k phi) of the bearing phi (a mirror-centre error or tilt for
     k = 1, an elliptic mirror for k = 2), k = 1-4, re-read through the mirror model: the best (k =
@@ -304,18 +376,23 @@ independent noise; near 1: the wall bends). **Corners**: configs/course.toml's `
     similar places, not because the camera carries it.
   So the bends are most likely in the maze itself (walls that are not straight) or change with the
   view; they stay a difference.
-- **Near walls.** log1 sees walls at 0.11-0.125 m ({log1["points_0.1m"]:.0f} points: it passes closer
-  than 0.125 m to a wall), with {log1["rms_mm_0.1m"]:.1f} mm of scatter, mostly bends (correlation
-  {log1["neighbour_correlation_0.1m"]:.2f}). The simulated explorer keeps to the corridors' middle,
-  0.135 m from the walls, and has {simulated["points_0.1m"]:.0f} points there on average.
+- **Near walls** (0.11-0.125 m, the ring's inner edge, where a pixel is 2 mm): {pair("rms_mm_0.1m")} mm
+  of scatter. log1's bends are largest there (neighbour correlation
+  {pair("neighbour_correlation_0.1m", 2)}), and even its beam-to-beam part is larger,
+  {pair("beam_to_beam_mm_0.1m")} mm: log1's edge noise grows towards the ring's inner edge (its
+  standing scans too: whole-pixel readings vary by {standing["0.10-0.15 m"]:.2f} px RMS from scan to
+  scan at 0.10-0.15 m, {standing["0.15-0.25 m"]:.2f} px at 0.15-0.25 m), where the simulator keeps
+  one edge noise for all ranges.
 - **Corners per scan**: {pair("corners_per_scan", 2)}; scans without a corner
-  {pair("scans_without_corner", 2)}. The simulated mazes (2 x 3 cells of 0.28 m, trees) put a corner
-  within 0.4 m of the front half less often than log1's corridor end and turn, and the simulated
-  runs are longer ({simulated["scans"]:.0f} scans against {log1["scans"]:.0f}), much of them along
-  straight corridors.
-- **Missing returns**: {pair("no_return", 3)} of the beams. log1's are 12 always-hidden beams
-  (modelled: `occluded`) and runs of neighbouring beams that see no wall within the ring (modelled
-  as independent dropouts: the simulated maze is closed, every beam has a wall).
+  {pair("scans_without_corner", 2)}, with two or more {pair("scans_with_two_corners", 2)}: the
+  simulated runs (2 x 3 cells of 0.28 m, trees; {simulated["scans"]:.0f} scans against
+  {log1["scans"]:.0f}) see a corner more often than log1 but rarely two at once, as log1 does at its
+  corridor's end.
+- **Missing returns**: {pair("no_return", 3)} of the beams; in runs beside a return nearer than
+  {NEAR_WALL} m, most likely a wall inside the blind disc: {pair("no_return_beside_near_wall", 3)}.
+  In the simulator those come from the geometry alone (the camera, 0.11 m ahead of the axle, passes
+  close to the walls in turns). log1's other zeros are 12 always-hidden beams (modelled:
+  `occluded`) and independent ones (modelled: `dropout`).
 - **Not compared**: beyond 0.4 m, which the filter does not use, log1's walls curve visibly (read by
   hand from its first scan: the end wall, 0.49 m straight ahead, reads 0.43 m at 0.31 m to the
   side, where a straight wall would stay at 0.49 m).
@@ -326,7 +403,8 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--log1", type=Path, default=LOG1, help="the real course log (default: %(default)s)")
     args = parser.parse_args()
-    runs = {"log1": load_run(args.log1, SensorOverrides(first_beam_angle=0.0, mount_x=0.0))}
+    log1_sensor = SensorOverrides(first_beam_angle=0.0).over(load_slam_config(COURSE).sensor)
+    runs = {"log1": load_run(args.log1, log1_sensor)}
     rows, measured = [], {}
     with tempfile.TemporaryDirectory() as folder:
         runs.update(simulated_runs(Path(folder)))
@@ -341,7 +419,8 @@ def main() -> None:
         "log1": camera_fixed_pattern(runs["log1"], LOG1_STANDING_SCANS),
         control: camera_fixed_pattern(runs[control], 0),
     }
-    text = summary(table, straightest_bearing_distortion(runs["log1"]), fixed)
+    standing = standing_noise(runs["log1"], LOG1_STANDING_SCANS)
+    text = summary(table, straightest_bearing_distortion(runs["log1"]), fixed, standing)
     (HERE / "sensor_comparison.md").write_text(text)
     figure(measured, HERE / "sensor_comparison.png")
     print(table.to_string(float_format=lambda value: f"{value:.3g}"))
