@@ -7,15 +7,14 @@ timings (the machine is shared). ir-sim is pinned (``bench_env.IRSIM_VERSION``) 
 pip when missing; if it cannot be, its columns say why it was skipped.
 Targets (issue 21): 64 envs at least 20 000 steps/s and 10x ``SyncVectorEnv``; the single env at
 least 20x ir-sim.
-Run: ``python benchmarks/bench_vector_env.py`` (``--no-install``: never install ir-sim).
+Run: ``python benchmarks/bench_vector_env.py`` (``--no-install``: never install ir-sim;
+``--cpu-time``: rates per second of CPU time, see ``bench_env``).
 """
 
 from __future__ import annotations
 
-import time
-
 import gymnasium as gym
-from bench_env import IRSIM_VERSION, irsim_comparison, mazeslam_rate
+from bench_env import IRSIM_VERSION, clock, clock_name, irsim_comparison, mazeslam_rate
 
 import mazeslam  # noqa: F401  (registers the environments)
 from mazeslam.envs.maze import generate_maze
@@ -41,10 +40,10 @@ def aggregate_rate(mode: str, num_envs: int, steps: int) -> float:
     actions = [envs.action_space.sample() for _ in range(steps + 3)]
     for action in actions[:3]:
         envs.step(action)
-    began = time.perf_counter()
+    began = clock()
     for action in actions[3:]:
         envs.step(action)
-    elapsed = time.perf_counter() - began
+    elapsed = clock() - began
     envs.close()
     return num_envs * steps / elapsed
 
@@ -114,5 +113,5 @@ if __name__ == "__main__":
     print(table.to_markdown(floatfmt=".4g"))
     print(
         f"targets: 64 envs >= {TARGET_RATE_64:.0f} steps/s and >= {TARGET_RATIO_64:.0f}x sync; "
-        f"single env >= {TARGET_IRSIM_RATIO_1:.0f}x ir-sim {IRSIM_VERSION}"
+        f"single env >= {TARGET_IRSIM_RATIO_1:.0f}x ir-sim {IRSIM_VERSION}; rates per second of {clock_name()}"
     )

@@ -108,14 +108,21 @@ class MazeGrids:
         distances = np.full(count * beams, np.inf)
         across_x = np.zeros(count * beams, dtype=bool)
         active = np.arange(count * beams)
-        lookahead = self._lookahead(len(active), max_range)
-        while len(active):
+        if self._lookahead(len(active), max_range) < self._crossings_in_range(max_range):
+            hit, hit_x, done = crossings.own_cell(self, envs, origin)  # many rays: the easy ones first
+            limit, lookahead = hit, 0  # nothing looked at yet
+        else:  # few: all at once
+            lookahead = self._crossings_in_range(max_range)
             hit, hit_x, done, limit = crossings.look(lookahead, max_range)
+        while True:
             distances[active[done]] = hit[done]
             across_x[active[done]] = hit_x[done]
+            if done.all():
+                break
             active = active[~done]
             crossings.advance(~done, limit, lookahead)
             lookahead = self._lookahead(len(active), max_range)
+            hit, hit_x, done, limit = crossings.look(lookahead, max_range)
         distances[distances > max_range * (1 + FLOAT32_SLACK)] = np.inf  # none in range
         shape = (count, beams)
         faces, along, distances = self._faces(origin, direction, distances.reshape(shape), across_x.reshape(shape))
@@ -126,8 +133,12 @@ class MazeGrids:
         """Band crossings per axis looked at per ray in one pass: all within ``max_range`` when few
         rays remain (one pass, no bookkeeping), else three (most rays meet a wall within three
         cells; measured fastest with 64 and 256 robots)."""
-        within_range = math.floor(max_range / self.cell_size) + 1
+        within_range = self._crossings_in_range(max_range)
         return within_range if rays * within_range <= LOOK_ALL_BELOW else min(3, within_range)
+
+    def _crossings_in_range(self, max_range: float) -> int:
+        """The most band crossings along one axis within ``max_range`` of any point."""
+        return math.floor(max_range / self.cell_size) + 1
 
     def _faces(self, origin, direction, distances, across_x):
         """The faces hit (as ``cast`` returns them) by the rays from ``origin`` (2, K, 1) (m) along
@@ -209,28 +220,27 @@ class MazeGrids:
         return np.stack([np.where(solid, bound, np.inf) for bound in bounds]).reshape(4, len(x), -1)
 
 
-def push_out(x: np.ndarray, y: np.ndarray, radius: float, boxes: np.ndarray, iterations: int = 3) -> np.ndarray:
-    """Move discs of ``radius`` (m) centred at (x[e], y[e]) (E,) (in place) out of the ``boxes``
-    (4, E, B) they overlap (``MazeGrids.boxes_near``), the deepest overlap first (a corner takes a
-    second pass); return (E,) bool, whether each disc overlapped one."""
-    touched = np.zeros(len(x), dtype=bool)
-    rows = np.arange(len(x))
-    low_x, low_y, high_x, high_y = boxes
+def push_out(position: np.ndarray, radius: float, boxes: np.ndarray, iterations: int = 3) -> np.ndarray:
+    """Move discs of ``radius`` (m) centred at ``position`` (2, E) (x, y; m; in place) out of the
+    ``boxes`` (4, E, B) they overlap (``MazeGrids.boxes_near``), the deepest overlap first (a
+    corner takes a second pass, over the discs just moved); return (E,) bool, whether each disc
+    overlapped one."""
+    touched = np.zeros(position.shape[1], dtype=bool)
+    low, high = boxes[:2], boxes[2:]  # (2, E, B) each: x, y
+    discs = np.arange(position.shape[1])  # the discs looked at in this pass
     for _ in range(iterations):
-        column_x, column_y = x[:, None], y[:, None]
-        gap_x = column_x - np.minimum(np.maximum(column_x, low_x), high_x)  # from each box's nearest point
-        gap_y = column_y - np.minimum(np.maximum(column_y, low_y), high_y)
-        squared = gap_x * gap_x + gap_y * gap_y  # inf for the boxes at infinity
-        overlap = squared.min(axis=1) < radius * radius
+        point = position[:, discs, None]
+        gap = point - np.minimum(np.maximum(point, low), high)  # from each box's nearest point (inf: none)
+        squared = (gap * gap).sum(axis=0)  # (E', B)
+        nearest = squared.argmin(axis=1)
+        deepest = squared[np.arange(len(discs)), nearest]
+        overlap = deepest < radius * radius
         if not overlap.any():
             break
-        touched |= overlap
-        hit = rows[overlap]
-        nearest = np.argmin(squared[hit], axis=1)
-        gap = np.maximum(np.sqrt(squared[hit, nearest]), 1e-12)
-        scale = (radius - gap) / gap
-        x[hit] += gap_x[hit, nearest] * scale
-        y[hit] += gap_y[hit, nearest] * scale
+        discs, low, high = discs[overlap], low[:, overlap], high[:, overlap]
+        touched[discs] = True
+        distance = np.maximum(np.sqrt(deepest[overlap]), 1e-12)
+        position[:, discs] += gap[:, overlap, nearest[overlap]] * ((radius - distance) / distance)
     return touched
 
 
@@ -262,6 +272,7 @@ class _BandCrossings:
         self.thin = np.float32(grids.thickness / s)  # share of a cell's width a wall band takes
         self.across = np.array([width, 1], dtype=np.int32)[:, None, None]
         up = direction > 0
+        self.up = up.reshape(2, -1)  # (2, R) whether each ray moves up x, up y
         inverse = 1 / np.abs(direction)
         # Along each axis, in the ray's own sense: q the origin's coordinate + t/2, and the first
         # band entered that of line index ``sense * lines`` (its near face at lines * s - t/2).
@@ -299,10 +310,34 @@ class _BandCrossings:
         limit = (t[:, -1] + spacing[:, 0]).min(axis=0)  # the nearest crossing not looked at
         return hit, hits[0] <= hits[1], (hit <= limit) | (limit > max_range), limit
 
+    def own_cell(self, grids: MazeGrids, envs: np.ndarray, origin: np.ndarray):
+        """The rays that leave their sensor's cell through one of its walls, where the sensor stands
+        inside a cell (not in an open wall's gap): there the nearer first crossing is the hit, in
+        the block beside the cell on that side. Returns (R,) arrays as ``look``: the hit (m), whether
+        through a vertical face, whether done (these rays)."""
+        i, j = grids.blocks_of(origin[0, :, 0], origin[1, :, 0])  # (K,) the sensors' blocks
+        inside = (i % 2 == 1) & (j % 2 == 1)  # a cell's interior, not a wall band
+        solid = grids.solid
+        # (K, 4): is the block beside the cell solid: left, right, below, above.
+        beside = np.column_stack(
+            [solid[envs, i, j - 1], solid[envs, i, np.minimum(j + 1, solid.shape[2] - 1)]]
+            + [solid[envs, i - 1, j], solid[envs, np.minimum(i + 1, solid.shape[1] - 1), j]]
+        )
+        first = self.floats[0]
+        across_x = first[0] <= first[1]
+        side = np.where(across_x, self.up[0], 2 + self.up[1]).reshape(len(envs), -1)  # (K, N)
+        done = np.take_along_axis(beside, side, axis=1) & inside[:, None]
+        return np.minimum(first[0], first[1]), across_x, done.ravel()
+
     def advance(self, keep: np.ndarray, limit: np.ndarray, lookahead: int) -> None:
         """Keep the rays where ``keep`` (R,) holds, moved past their crossings nearer than ``limit``
-        (m) (``look``ed at with ``lookahead`` and found free)."""
-        self.floats, self.ints = self.floats[..., keep], self.ints[..., keep]
+        (m) (``look``ed at with ``lookahead`` and found free; none when 0)."""
+        # (np.compress keeps the arrays C-contiguous, unlike a[..., keep].)
+        self.floats, self.ints, self.up = (
+            np.compress(keep, part, axis=-1) for part in (self.floats, self.ints, self.up)
+        )
+        if not lookahead:
+            return
         first, spacing = self.floats[:2]
         passed = np.floor((limit[keep] - first) / spacing) + 1
         passed = np.minimum(np.maximum(passed, 0), lookahead).astype(np.int32)

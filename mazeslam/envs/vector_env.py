@@ -109,6 +109,7 @@ class MazeVectorEnv(VectorEnv):
         # and of dropout uniforms, and how many steps of them are used.
         self._normals = np.zeros((num_envs, DRAW_AHEAD, 2 * self.physics_steps + laser.beams))
         self._uniforms = np.ones((num_envs, DRAW_AHEAD, laser.beams)) if laser.dropout else None
+        self._no_dropouts = np.ones((num_envs, laser.beams))
         self._drawn = np.full(num_envs, DRAW_AHEAD)
 
     # -- episode ------------------------------------------------------------------------------
@@ -208,11 +209,11 @@ class MazeVectorEnv(VectorEnv):
             self._draw_ahead(env)
         rows = self._drawn[envs]
         self._drawn[envs] += 1
-        normals, steps = self._normals[envs, rows], self.physics_steps
-        if self._uniforms is None:
-            uniforms = np.ones((len(envs), self.config.laser.beams))
-        else:
-            uniforms = self._uniforms[envs, rows]
+        which: slice | np.ndarray = envs
+        if len(envs) == self.num_envs and (rows == rows[0]).all():  # every env at the same row: a view
+            which, rows = slice(None), rows[0]
+        normals, steps = self._normals[which, rows], self.physics_steps
+        uniforms = self._no_dropouts[: len(normals)] if self._uniforms is None else self._uniforms[which, rows]
         return normals[:, : 2 * steps].reshape(-1, steps, 2), normals[:, 2 * steps :], uniforms
 
     def _draw_ahead(self, env: int) -> None:
@@ -254,15 +255,15 @@ class MazeVectorEnv(VectorEnv):
         middle = headings[:, :-1] + 0.5 * turn
         forward = 0.5 * (travel[..., 0] + travel[..., 1])
         step_x, step_y = forward * np.cos(middle), forward * np.sin(middle)  # (E, steps) m
-        x, y = self.poses[:, 0].copy(), self.poses[:, 1].copy()
+        position = self.poses[:, :2].T.copy()  # (2, E) m
         reach = robot.body_radius + 2 * robot.max_wheel_speed * dt * steps  # with room for slip
-        boxes = self._grids().boxes_near(x, y, reach)
+        boxes = self._grids().boxes_near(position[0], position[1], reach)
         touched = np.zeros(self.num_envs, dtype=bool)
         for step in range(steps):
-            x += step_x[:, step]
-            y += step_y[:, step]
-            touched |= push_out(x, y, robot.body_radius, boxes)
-        self.poses = np.column_stack([x, y, wrap_angle(headings[:, -1])])
+            position[0] += step_x[:, step]
+            position[1] += step_y[:, step]
+            touched |= push_out(position, robot.body_radius, boxes)
+        self.poses = np.column_stack([position.T, wrap_angle(headings[:, -1])])
         return touched
 
     def _read_odometry(self) -> np.ndarray:
