@@ -4,15 +4,16 @@ The stages (see docs/architecture.md): simulate a maze run or record a real one 
 truth and map sidecars) -> corners -> FastSLAM -> metrics. Start with ``mazeslam.simulate`` and
 ``mazeslam.log.read``.
 
-Importing the package registers the Gymnasium environment ``mazeslam/Maze-v0`` (truncated after
+The package registers the Gymnasium environment ``mazeslam/Maze-v0`` (truncated after
 ``MAX_EPISODE_STEPS``; its vector entry point ``make_vector_env``: ``mazeslam.envs.vector_env.MazeVectorEnv``,
-batched numpy physics) and loads nothing
-heavier than Gymnasium itself (which has no lazy plugin registration since 1.0): the simulator
-(pymunk) loads on first use of ``mazeslam.simulate`` or ``mazeslam.SimulationConfig``, plotting,
-tables and the camera only in the modules that need them.
+batched numpy physics) as soon as Gymnasium is imported, before or after mazeslam, and loads
+nothing heavy itself: Gymnasium (which has no lazy plugin registration since 1.0) only when the
+program imports it, the simulator (pymunk) on first use of ``mazeslam.simulate`` or
+``mazeslam.SimulationConfig``, plotting, tables and the camera only in the modules that need them.
 """
 
-import gymnasium
+import importlib.util
+import sys
 
 __all__ = ["SimulationConfig", "simulate"]
 __version__ = "0.1.0"
@@ -30,13 +31,43 @@ def make_vector_env(num_envs: int = 1, max_episode_steps: int | None = None, max
     return MazeVectorEnv(num_envs=num_envs, max_steps=limit, **kwargs)
 
 
-if "mazeslam/Maze-v0" not in gymnasium.registry:
-    gymnasium.register(
-        id="mazeslam/Maze-v0",
-        entry_point="mazeslam.envs.maze_env:MazeEnv",
-        vector_entry_point="mazeslam:make_vector_env",
-        max_episode_steps=MAX_EPISODE_STEPS,
-    )
+def _register() -> None:
+    """Register ``mazeslam/Maze-v0`` with Gymnasium (once)."""
+    import gymnasium
+
+    if "mazeslam/Maze-v0" not in gymnasium.registry:
+        gymnasium.register(
+            id="mazeslam/Maze-v0",
+            entry_point="mazeslam.envs.maze_env:MazeEnv",
+            vector_entry_point="mazeslam:make_vector_env",
+            max_episode_steps=MAX_EPISODE_STEPS,
+        )
+
+
+class _RegisterWithGymnasium:
+    """An import hook (``sys.meta_path``) that registers the environment right after Gymnasium is
+    imported, so that ``import mazeslam`` does not import Gymnasium (173 ms) itself."""
+
+    def find_spec(self, name, path=None, target=None):
+        if name != "gymnasium":
+            return None
+        sys.meta_path.remove(self)
+        spec = importlib.util.find_spec(name)
+        if spec is not None and spec.loader is not None:
+            load = spec.loader.exec_module
+
+            def exec_module(module):
+                load(module)
+                _register()
+
+            spec.loader.exec_module = exec_module
+        return spec
+
+
+if "gymnasium" in sys.modules:
+    _register()
+elif not any(isinstance(finder, _RegisterWithGymnasium) for finder in sys.meta_path):
+    sys.meta_path.insert(0, _RegisterWithGymnasium())
 
 
 def __getattr__(name: str):

@@ -21,6 +21,7 @@ Which bearing each range belongs to is not in the log: see ``mazeslam.beams`` an
 
 from __future__ import annotations
 
+import io
 import math
 from collections import Counter
 from collections.abc import Iterator
@@ -172,14 +173,67 @@ def read(path: str | Path, strict: bool = True) -> CourseLog:
 
 
 def parse(text: str, source: str = "<text>", strict: bool = True) -> CourseLog:
-    """Parse the text of a course log; see ``read``."""
-    rows = [
-        (number, line.replace(",", " ").split())
-        for number, line in enumerate(text.splitlines(), start=1)
+    """Parse the text of a course log; see ``read``.
+
+    The numbers are converted all at once (numpy's C parser) and checked as arrays; only a log
+    with a bad line is then read line by line, to name the first bad line and why (strict) or to
+    leave the bad lines out (lenient)."""
+    lines = text.splitlines()
+    numbers = [
+        number
+        for number, line in enumerate(lines, start=1)
         if line.strip() and not line.lstrip().startswith(_COMMENT_PREFIXES)
     ]
-    if not rows:
+    if not numbers:
         raise LogFormatError(source, 1, "the log holds no records")
+    table = _valid_table([lines[number - 1] for number in numbers])
+    if table is None:
+        return _parse_line_by_line(
+            [(number, lines[number - 1].replace(",", " ").split()) for number in numbers], source, strict
+        )
+    return CourseLog(
+        times=table[:, 0],
+        flags=table[:, 1].astype(np.int8),
+        values=table[:, 2:],
+        source=source,
+        line_numbers=np.array(numbers),
+    )
+
+
+def _valid_table(lines: list[str]) -> np.ndarray | None:
+    """The records ``lines`` (R) as a table (R, width), or None unless every line is a valid
+    record (the conditions of ``_check_line``, checked over the whole table at once)."""
+    try:
+        table = np.loadtxt(io.StringIO("\n".join(lines).replace(",", " ")), comments=None, ndmin=2)
+    except ValueError:  # a value that is not a number, or lines of different widths
+        return None
+    width = table.shape[1]
+    if table.shape[0] != len(lines) or width < 3 or not np.isfinite(table).all():
+        return None
+    times, flags, values = table[:, 0], table[:, 1], table[:, 2:]
+    odometry, scan, landmark = flags == ODOMETRY, flags == SCAN, flags == LANDMARK
+    valid = (
+        np.abs(times).max() <= MAX_TIME
+        and np.abs(values).max() <= MAX_VALUE
+        and not np.any(np.diff(times) < 0)
+        and (odometry | scan | landmark).all()
+        and not (odometry.any() and (width < 4 or np.any(table[odometry, 4:] != PADDING)))
+        and not np.any(values[scan] < 0)
+        and not (landmark.any() and (width < 5 or not _valid_landmarks(table[landmark])))
+    )
+    return table if valid else None
+
+
+def _valid_landmarks(rows: np.ndarray) -> bool:
+    """Landmark records (n, width >= 5): integer ids >= -1, positive ranges, padded with -1."""
+    ids = rows[:, 2]
+    return bool(
+        np.all(ids == np.round(ids)) and np.all(ids >= -1) and np.all(rows[:, 3] > 0) and np.all(rows[:, 5:] == PADDING)
+    )
+
+
+def _parse_line_by_line(rows: list[tuple[int, list[str]]], source: str, strict: bool) -> CourseLog:
+    """``parse`` of split lines ``rows`` ((line number, values)), checked one by one."""
     if strict:
         width = len(rows[0][1])
     else:

@@ -15,7 +15,6 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
-from tqdm.auto import tqdm
 
 from mazeslam import log
 from mazeslam.beams import EXERCISE_CONVENTION, BeamGeometry, SensorOverrides
@@ -100,6 +99,8 @@ def run_fastslam(
     ``on_update(record_index, filter)``, when given, is called after every observation update (for
     a live view: ``mazeslam.live``); it must not change the filter.
     """
+    from tqdm.auto import tqdm
+
     params = params or FastSLAMParams()
     slam = FastSLAM(params, start_pose)
     extractor = CornerExtractor(geometry, course_log.width, corner_params) if course_log.n_beams else None

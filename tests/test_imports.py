@@ -5,9 +5,8 @@ import sys
 
 from conftest import PROJECT_ROOT
 
-#: Modules that ``import mazeslam, mazeslam.log`` must not load. (Gymnasium is loaded: the package
-#: registers ``mazeslam/Maze-v0`` on import, and Gymnasium >= 1.0 has no lazy plugin registration.)
-HEAVY = ("pymunk", "matplotlib", "pandas", "cv2", "scipy.spatial")
+#: Modules that ``import mazeslam, mazeslam.log`` must not load.
+HEAVY = ("pymunk", "gymnasium", "matplotlib", "pandas", "cv2", "scipy", "tqdm")
 
 
 def run_python(code: str) -> str:
@@ -32,8 +31,22 @@ def test_the_simulator_and_the_environment_are_there_on_first_use():
     assert printed.split() == ["(180,)", "mazeslam.envs.simulator", "180"]
 
 
+def test_the_environment_is_registered_whichever_is_imported_first():
+    for first, second in (("mazeslam", "gymnasium"), ("gymnasium", "mazeslam")):
+        printed = run_python(f"import {first}, {second}\nprint(gymnasium.spec('mazeslam/Maze-v0').max_episode_steps)")
+        assert printed.split() == ["3000"]
+
+
 def test_an_unknown_attribute_is_an_attribute_error():
     import mazeslam
 
     assert not hasattr(mazeslam, "simulator_that_does_not_exist")
     assert {"simulate", "SimulationConfig"} <= set(dir(mazeslam))
+
+
+def test_the_chi_square_bounds_written_out_are_scipys():
+    from scipy.stats import chi2
+
+    from mazeslam.evaluation.consistency import OBSERVATION_BOUND_95, POSE_BOUND_95
+
+    assert (POSE_BOUND_95, OBSERVATION_BOUND_95) == (chi2.ppf(0.95, 3), chi2.ppf(0.95, 2))

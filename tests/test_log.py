@@ -76,6 +76,7 @@ def test_writer_refuses_bad_records(tmp_path):
         ("0.05 1 0.5 0.1 0.2 0.3", 3, "timestamp 0.05 is earlier than the previous record's 0.100000"),
         ("0.2 0 0.01 0.0 0 0", 3, "not padded with -1 after dX and dTheta (column 5 is 0)"),
         ("0.2 1 0.5 -0.1 0.2 0.3", 3, "negative range -0.1 in column 4"),
+        ("0.2 1 0.5 # 0.2 0.3", 3, "value '#' in column 4 is not a number"),  # a comment starts a line only
     ],
 )
 def test_bad_input_names_file_line_and_reason(tmp_path, bad_line, line_number, reason):
@@ -87,6 +88,15 @@ def test_bad_input_names_file_line_and_reason(tmp_path, bad_line, line_number, r
     assert error.value.line == line_number
     assert str(error.value) == f"{path}:{line_number}: {error.value.reason}"
     assert reason in error.value.reason
+
+
+def test_the_table_at_once_and_line_by_line_read_alike():
+    text = GOOD.replace("0.5 1.125", "5e-1 1_125e-3")  # both spellings Python's float reads
+    fast = log.parse(text)
+    rows = [(number, line.split()) for number, line in enumerate(text.splitlines(), start=1)]
+    slow = log._parse_line_by_line(rows, "<text>", strict=True)
+    np.testing.assert_array_equal(fast.values, slow.values)
+    np.testing.assert_array_equal(fast.line_numbers, slow.line_numbers)
 
 
 def test_lenient_reading_reports_skipped_lines():

@@ -4,21 +4,22 @@ from __future__ import annotations
 
 import json
 from pathlib import Path
+from typing import TYPE_CHECKING
 
-import matplotlib
+import numpy as np
 
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
-from matplotlib.patches import Ellipse  # noqa: E402
+from mazeslam import log, sidecars
+from mazeslam.beams import BeamGeometry
+from mazeslam.config import jsonable
+from mazeslam.geometry import transform_points
+from mazeslam.slam import SlamResult
 
-from mazeslam import log, sidecars  # noqa: E402
-from mazeslam.beams import BeamGeometry  # noqa: E402
-from mazeslam.config import jsonable  # noqa: E402
-from mazeslam.evaluation.plots import draw_ellipses, draw_walls, save_figure  # noqa: E402
-from mazeslam.evaluation.slam_view import ScanSource, SlamView, save_animation, view_extent  # noqa: E402
-from mazeslam.geometry import transform_points  # noqa: E402
-from mazeslam.slam import SlamResult  # noqa: E402
+if TYPE_CHECKING:
+    from matplotlib.patches import Ellipse
+
+    from mazeslam.evaluation.slam_view import ScanSource
+
+# matplotlib (0.5 s) and the figure modules load when a figure is first drawn, not with the module.
 
 
 def consistency(result: SlamResult) -> dict:
@@ -72,6 +73,13 @@ def plot_slam(
     """The exercise's figure: best particle's map with 2-sigma ellipses, particles in red, scan
     points in black, the estimated path; with truth, the true path (``truth_label``: a reference
     path is not truth), walls and landmarks too."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from mazeslam.evaluation.plots import draw_ellipses, draw_walls, save_figure
+
     fig, ax = plt.subplots(figsize=(9, 7))
     draw_walls(ax, walls)
     if len(points):  # one rasterised artist: thousands of points cost one image, not thousands of marks
@@ -108,6 +116,8 @@ def plot_slam(
 
 
 def _ellipse(mean, covariance, sigmas: float = 2.0) -> Ellipse:
+    from matplotlib.patches import Ellipse
+
     values, vectors = np.linalg.eigh(covariance)
     angle = np.degrees(np.arctan2(vectors[1, 1], vectors[0, 1]))
     width, height = 2 * sigmas * np.sqrt(np.maximum(values[::-1], 0))
@@ -130,6 +140,8 @@ def animate_slam(
     """The run as an animation, one frame per snapshot (``SlamView``: particles, map so far, path so
     far, the current scan and its corners from ``scan_at``): MP4 when ffmpeg is available (``path``
     with suffix .mp4), GIF otherwise; returns the path written. A progress bar with ``progress``."""
+    from mazeslam.evaluation.slam_view import SlamView, save_animation, view_extent
+
     extent = view_extent(points, result.mean_poses, truth)
     view = SlamView(result.times, result.mean_poses, extent, title, truth, walls, scan_at, truth_label=truth_label)
     frames = [(index, particles, landmarks) for index, particles, landmarks in result.snapshots]
