@@ -180,3 +180,32 @@ def test_blind_cloud_growth_figure(tmp_path):
 def test_maze_env_figure(tmp_path):
     maze_env = load_script(ROOT / "scripts" / "figures" / "maze_env.py", "maze_env_figure")
     non_empty_png(maze_env.main(tmp_path / "maze_env.png", steps=20, seed=0), 20_000)
+
+
+def test_slam_figure_is_a_few_artists_not_one_per_item(monkeypatch, tmp_path):
+    """Issue 18: walls, ellipses and points each one artist, so the figure draws in well under a second."""
+    import time
+
+    from mazeslam import simulate
+    from mazeslam.evaluation import slam_report
+    from mazeslam.loaded_run import load_run
+    from mazeslam.slam import slam_on_run
+
+    run = load_run(simulate(tmp_path / "run.log", seed=6, duration=20.0, progress=False).log_path)
+    result = slam_on_run(run, progress=False)
+    points = slam_report.scan_points_world(run.log, result.mean_poses, run.geometry)
+    drawn = {}
+    real_save = slam_report.save_figure
+
+    def save(fig, ax, path, title=""):
+        drawn.update(lines=len(ax.lines), patches=len(ax.patches), collections=len(ax.collections))
+        return real_save(fig, ax, path, title)
+
+    monkeypatch.setattr(slam_report, "save_figure", save)
+    began = time.perf_counter()
+    path = slam_report.plot_slam(tmp_path / "slam.png", result, points, run.truth, run.walls, "short", run.true_corners)
+    seconds = time.perf_counter() - began
+    non_empty_png(path, 20_000)
+    assert len(run.walls) > 4 and len(result.landmarks) > 2
+    assert drawn["patches"] == 0 and drawn["lines"] <= 8 and drawn["collections"] <= 2, drawn
+    assert seconds < 5.0  # about 0.2 s on an idle core; generous for a loaded machine
