@@ -76,7 +76,7 @@ FIGURES: list[tuple[str, str, str, float]] = [
 
 #: Where the documentation shows images from: markdown files (globs, relative to the repository).
 DOCUMENTS = ["README.md", "docs/*.md", "experiments/*.md", "experiments/**/*.md"]
-IMAGE = re.compile(r"\]\(([^)\s]+\.(?:png|gif|jpg|jpeg|svg))\)")
+IMAGE = re.compile(r"\]\(<?([^)>\s]+\.(?:png|gif|jpg|jpeg|svg))>?\)")
 
 
 def commands_of(commands: str, tmp: Path) -> list[list[str]]:
