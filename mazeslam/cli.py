@@ -261,15 +261,15 @@ def _geometry_overrides(first_beam_angle, beam_direction, mount_x):
 @click.option(
     "--live",
     is_flag=True,
-    help="Show each scan as it is processed in a window (points, lines, corners, the robot); without a "
-    "display, says so (use --plot or --animate).",
+    help="Show each scan as it is processed in a window (points, lines, corners, the robot), --max-fps scans "
+    "a second; without a display, says so (use --plot or --animate).",
 )
 @click.option(
     "--max-fps",
     type=click.FloatRange(min=0.1),
-    default=5.0,
+    default=10.0,
     show_default=True,
-    help="With --live: at most this many frames a second.",
+    help="With --live: frames a second (in a window every scan is shown at this rate).",
 )
 @beam_geometry_options
 def corners(

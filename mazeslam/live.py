@@ -8,7 +8,9 @@ half as fast as without the window.
 
 ``CornersLiveView`` is the same for ``mazeslam corners``: the current scan in the robot frame, its
 extracted lines and corners, and the robot (a triangle along its heading, +x), redrawn as scans are
-extracted, at most ``max_fps`` times a second and never sooner than the last redraw took.
+extracted, at most ``max_fps`` times a second. In a window every scan is shown (extraction waits for
+the window: it is far faster than anyone can watch); off-screen, scans in between are skipped and a
+frame is never drawn sooner than the last one took.
 
 A window needs a display and an interactive matplotlib backend (Qt, Tk, GTK, macOS). Without one
 (``MPLBACKEND=Agg``, a server without ``DISPLAY``) the view draws into an off-screen figure and
@@ -178,7 +180,16 @@ class CornersLiveView:
 
     def __call__(self, report, index: int) -> None:
         now = time.perf_counter()
-        if now - self._last < max(1.0 / self.max_fps, self._last_cost):
+        if self.window:
+            # On screen every scan is shown, at most max_fps a second: extraction (thousands of scans
+            # a second) waits for the window, or a log would flash past in a fraction of a second.
+            import matplotlib.pyplot as plt
+
+            wait = self._last + 1.0 / self.max_fps - now
+            if wait > 0:
+                plt.pause(wait)
+                now = time.perf_counter()
+        elif now - self._last < max(1.0 / self.max_fps, self._last_cost):
             return
         self.draw(report, index)
         self._last = time.perf_counter()

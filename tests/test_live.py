@@ -90,3 +90,23 @@ def test_corners_live_view_draws_the_current_scan_at_a_bounded_rate(short_log, m
     CornerReport.from_log(short_log, progress=False, on_scan=slow)
     assert slow.frames <= 2.0 * (time.perf_counter() - began) + 1
     slow.close()
+
+
+def test_corners_live_in_a_window_shows_every_scan_at_the_frame_rate(short_log, monkeypatch):
+    """With a window, extraction waits for it: every scan is drawn, at most max_fps a second."""
+    import matplotlib.pyplot as plt
+
+    from mazeslam import live
+    from mazeslam.evaluation.corner_report import CornerReport
+    from mazeslam.scans import load_scans
+
+    waits: list[float] = []
+    monkeypatch.setenv("MPLBACKEND", "Agg")
+    monkeypatch.setattr(live, "choose_backend", lambda: (True, "agg"))
+    monkeypatch.setattr(plt, "pause", lambda seconds: waits.append(seconds))
+    view = live.CornersLiveView(load_scans(short_log), max_fps=50.0)
+    assert view.window and view.message is None
+    report = CornerReport.from_log(short_log, progress=False, on_scan=view)
+    assert view.frames == len(report.features)
+    assert waits and max(waits) <= 1 / 50.0 + 1e-9
+    view.close(report)
