@@ -57,6 +57,7 @@ FIGURES: list[tuple[str, str, str, float]] = [
     ("consistency", "experiments/consistency/nees_over_time.png experiments/consistency/results.csv experiments/consistency/summary.md", "python experiments/consistency/run.py", 20.0),  # noqa: E501
     ("carmen_grid", "experiments/carmen_grid/results/*_compare.png", "python experiments/carmen_grid/figures.py", 0.2),  # noqa: E501
     ("course_robot_sensor", "experiments/course_robot/sensor_comparison.png", "python experiments/course_robot/sensor_comparison.py", 1.0),  # noqa: E501
+    ("course_robot_maps", "docs/img/course_log1_maps.png docs/img/course_sim_maps.png", "python experiments/course_robot/figures.py", 1.0),  # noqa: E501
     ("maps_particles", "experiments/particles/results/*.png", "mazeslam report experiments/particles/results", 0.1),  # noqa: E501
     ("maps_odometry_variance", "experiments/odometry_variance/results/*.png", "mazeslam report experiments/odometry_variance/results", 0.1),  # noqa: E501
     ("maps_sensor_variance", "experiments/sensor_variance/results/*.png", "mazeslam report experiments/sensor_variance/results", 0.1),  # noqa: E501
