@@ -222,9 +222,10 @@ class MazeGrids:
 
 def push_out(position: np.ndarray, radius: float, boxes: np.ndarray, iterations: int = 3) -> np.ndarray:
     """Move discs of ``radius`` (m) centred at ``position`` (2, E) (x, y; m; in place) out of the
-    ``boxes`` (4, E, B) they overlap (``MazeGrids.boxes_near``), the deepest overlap first (a
-    corner takes a second pass, over the discs just moved); return (E,) bool, whether each disc
-    overlapped one."""
+    ``boxes`` (4, E, B) they overlap (``MazeGrids.boxes_near``), the deepest overlap first; return
+    (E,) bool, whether each disc overlapped one. A disc that overlapped two boxes (a corner) takes
+    another pass; one that overlapped one is out of every box once pushed out of it, as it moves
+    much less than a corridor's free width (boxes across a corridor are that far apart)."""
     touched = np.zeros(position.shape[1], dtype=bool)
     low, high = boxes[:2], boxes[2:]  # (2, E, B) each: x, y
     discs = np.arange(position.shape[1])  # the discs looked at in this pass
@@ -237,10 +238,14 @@ def push_out(position: np.ndarray, radius: float, boxes: np.ndarray, iterations:
         overlap = deepest < radius * radius
         if not overlap.any():
             break
-        discs, low, high = discs[overlap], low[:, overlap], high[:, overlap]
+        discs = discs[overlap]
         touched[discs] = True
         distance = np.maximum(np.sqrt(deepest[overlap]), 1e-12)
         position[:, discs] += gap[:, overlap, nearest[overlap]] * ((radius - distance) / distance)
+        corner = (squared[overlap] < radius * radius).sum(axis=1) > 1
+        if not corner.any():
+            break
+        discs, low, high = discs[corner], low[:, overlap][:, corner], high[:, overlap][:, corner]
     return touched
 
 
@@ -274,23 +279,27 @@ class _BandCrossings:
         up = direction > 0
         self.up = up.reshape(2, -1)  # (2, R) whether each ray moves up x, up y
         inverse = 1 / np.abs(direction)
-        # Along each axis, in the ray's own sense: q the origin's coordinate + t/2, and the first
-        # band entered that of line index ``sense * lines`` (its near face at lines * s - t/2).
-        q = np.where(up, origin + half, half - origin)
+        # Per sensor, axis and sense (last axis: down, up): q the origin's coordinate + t/2 along
+        # the sense, and the first band entered that of line index ``sense * lines`` (its near face
+        # at lines * s - t/2, ``ahead`` = lines * s - q metres on along that axis).
+        sense = np.array([-1, 1])
+        q = sense * origin + half  # (2, K, 2)
         lines = np.floor(q / s) + 1
+        ahead = lines * s - q
+        unit = np.array([1, width])[:, None, None]  # flat stride of a block along x, along y
+        stride = 2 * unit * sense  # (2, 1, 2)
+        start = (envs * (height * width))[:, None] + self.across[:, 0][:, :, None] + stride * lines
         rays = direction.shape[1] * direction.shape[2]
         self.floats = np.empty((4, 2, rays), dtype=np.float32)
         floats = self.floats.reshape(4, *direction.shape)
-        np.multiply(lines * s - q, inverse, out=floats[0])  # first
+        np.multiply(np.where(up, ahead[..., 1:], ahead[..., :1]), inverse, out=floats[0])  # first
         np.multiply(s, inverse, out=floats[1])  # spacing
         floats[2] = (origin[::-1] + half) / s  # offset
         np.multiply(direction[::-1], 1 / s, out=floats[3])  # rate
-        unit = np.array([1, width])[:, None, None]  # flat stride of a block along x, along y
-        base = (envs * (height * width))[:, None] + self.across  # band 1 across (+ 2 floors)
         self.ints = np.empty((2, 2, rays), dtype=np.int32)
         ints = self.ints.reshape(2, *direction.shape)
-        ints[1] = np.where(up, 2 * unit, -2 * unit)  # stride
-        ints[0] = base + ints[1] * lines  # start: band 2k of line k = sense * lines
+        ints[0] = np.where(up, start[..., 1:], start[..., :1])  # band 2k (+ band 1 across) of line k
+        ints[1] = np.where(up, stride[..., 1:], stride[..., :1])
 
     def look(self, lookahead: int, max_range: float) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """Look at the next ``lookahead`` band crossings per axis of every ray; return (R,) arrays:

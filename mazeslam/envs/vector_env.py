@@ -107,8 +107,8 @@ class MazeVectorEnv(VectorEnv):
         self._autoreset = np.zeros(num_envs, dtype=bool)
         # Random draws made ahead (``_draw``): per env, DRAW_AHEAD steps of normals (slip, noise)
         # and of dropout uniforms, and how many steps of them are used.
-        self._normals = np.zeros((num_envs, DRAW_AHEAD, 2 * self.physics_steps + laser.beams))
-        self._uniforms = np.ones((num_envs, DRAW_AHEAD, laser.beams)) if laser.dropout else None
+        self._normals = np.zeros((num_envs, DRAW_AHEAD, 2 * self.physics_steps + laser.beams), dtype=np.float32)
+        self._uniforms = np.ones((num_envs, DRAW_AHEAD, laser.beams), dtype=np.float32) if laser.dropout else None
         self._no_dropouts = np.ones((num_envs, laser.beams))
         self._drawn = np.full(num_envs, DRAW_AHEAD)
 
@@ -199,7 +199,7 @@ class MazeVectorEnv(VectorEnv):
         self.visited = np.zeros((self.num_envs, maze.rows, maze.cols), dtype=bool)
 
     def _draw(self, envs: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """The listed envs' random draws for one step, from each env's own generator: standard
+        """The listed envs' random draws for one step (float32), from each env's own generator: standard
         normals for the wheel slip (E', physics steps, 2) and the range noise (E', N), and uniforms
         for the dropouts (E', N) (ones without dropouts: never dropped). Each generator is drawn
         ``DRAW_AHEAD`` steps at a time (normals, then uniforms), so the draws of an env depend on
@@ -220,9 +220,9 @@ class MazeVectorEnv(VectorEnv):
         """Refill env ``env``'s ``DRAW_AHEAD`` steps of draws from its generator."""
         rng = self.generators[env]
         assert rng is not None  # reset first
-        self._normals[env] = rng.standard_normal(self._normals.shape[1:])
+        self._normals[env] = rng.standard_normal(self._normals.shape[1:], dtype=np.float32)
         if self._uniforms is not None:
-            self._uniforms[env] = rng.random(self._uniforms.shape[1:])
+            self._uniforms[env] = rng.random(self._uniforms.shape[1:], dtype=np.float32)
         self._drawn[env] = 0
 
     # -- physics ------------------------------------------------------------------------------
@@ -279,19 +279,23 @@ class MazeVectorEnv(VectorEnv):
         (standard normals) and dropout ``uniforms`` (E', N); count the wall bins their noise-free
         beams land on and the cells they stand in; return (E,) newly seen bins and (E,) new cells."""
         laser = self.config.laser
-        x, y, heading = self.poses[envs].T
+        sensor_x, sensor_y, heading = self.poses[envs].T
         mount_x, mount_y = laser.geometry.mount_x, laser.geometry.mount_y
-        sensor_x = x + mount_x * np.cos(heading) - mount_y * np.sin(heading)
-        sensor_y = y + mount_x * np.sin(heading) + mount_y * np.cos(heading)
+        if mount_x or mount_y:
+            cos_h, sin_h = np.cos(heading), np.sin(heading)
+            sensor_x, sensor_y = (
+                sensor_x + mount_x * cos_h - mount_y * sin_h,
+                sensor_y + mount_x * sin_h + mount_y * cos_h,
+            )
         grids = self._grids()
         ranges, faces, along = grids.cast(envs, sensor_x, sensor_y, heading, self.bearings, laser.max_range)
-        noisy = ranges + noise * laser.range_noise_std
-        valid = np.isfinite(ranges) & (noisy >= laser.min_range) & (noisy <= laser.max_range)
-        self.last_scan[envs] = np.where(valid & (uniforms >= laser.dropout), noisy, 0.0)
         hit = np.isfinite(ranges)
-        bins = np.broadcast_to(envs[:, None], hit.shape)[hit] * self.seen.shape[1] + grids.face_bins(
-            faces[hit], along[hit], WALL_SAMPLE_SPACING
-        )
+        noisy = ranges + noise * laser.range_noise_std
+        valid = hit & (noisy >= laser.min_range) & (noisy <= laser.max_range)
+        if laser.dropout:
+            valid &= uniforms >= laser.dropout
+        self.last_scan[envs] = np.where(valid, noisy, 0.0)
+        bins = (envs[:, None] * self.seen.shape[1] + grids.face_bins(faces, along, WALL_SAMPLE_SPACING))[hit]
         new = np.unique(bins[self.wall_bins.ravel()[bins] & ~self.seen.ravel()[bins]])
         self.seen.ravel()[new] = True
         newly_seen = np.bincount(new // self.seen.shape[1], minlength=self.num_envs)
