@@ -15,9 +15,9 @@ sensor's does. The mirror's constants are those of ``CameraCalibration``; the ri
 laser's ``min_range`` and ``max_range`` (metres), which ``VirtualLaser`` applies to the reported
 ranges.
 
-Not modelled: log1's walls also bend by a few millimetres over many neighbouring beams
-(experiments/course_robot/sensor_comparison.md); here the walls are straight and the noise is
-independent from beam to beam.
+Not modelled (experiments/course_robot/sensor_comparison.md): log1's walls also bend by a few
+millimetres over many neighbouring beams, and its edge noise grows towards the ring's inner edge;
+here the walls are straight and one edge noise, independent from beam to beam, holds at all ranges.
 """
 
 from __future__ import annotations
