@@ -37,8 +37,7 @@ def timed_laser_odometry(name: str, folder: Path) -> tuple[log.CourseLog, float]
 
 def run() -> list[dict]:
     if not CARMEN.exists():
-        print(f"laser odometry benchmark skipped: no CARMEN logs at {CARMEN}")
-        return []
+        return [{"benchmark": "laser odometry, aces and orebro", "skipped": f"no CARMEN logs at {CARMEN}"}]
     with tempfile.TemporaryDirectory() as folder:
         aces, aces_seconds = timed_laser_odometry("aces", Path(folder))
         orebro, orebro_seconds = timed_laser_odometry("orebro", Path(folder))
