@@ -19,15 +19,15 @@ Run: ``python benchmarks/bench_fastslam.py``.
 from __future__ import annotations
 
 import dataclasses
-import os
 import sys
 import tempfile
-import time
 from collections.abc import Iterator
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
+sys.path.insert(0, str(Path(__file__).resolve().parent))
 
+from bench_env import clock, clock_name  # noqa: E402  (one clock for the benchmarks that offer CPU time)
 from reference_fastslam import LoopFastSLAM  # noqa: E402
 
 from mazeslam import log, simulate  # noqa: E402
@@ -43,15 +43,6 @@ TARGET_SPEEDUP = 100.0
 TARGET_MAP_RATIO = 1.5
 TARGET_REAL_TIME = 20.0
 TARGET_REAL_TIME_MANY = 1.0
-
-
-def clock() -> float:
-    """Seconds of the wall clock, or of this process's CPU time (``--cpu-time``)."""
-    return time.process_time() if uses_cpu_time() else time.perf_counter()
-
-
-def uses_cpu_time() -> bool:
-    return "--cpu-time" in sys.argv or os.environ.get("MAZESLAM_BENCH_CLOCK") == "cpu"
 
 
 def _steps(run: LoadedRun, scans: int) -> list[tuple[str, tuple]]:
@@ -153,4 +144,4 @@ if __name__ == "__main__":
 
     for row in run(full="--full" in sys.argv):
         print(pd.DataFrame([row]).set_index("benchmark").to_markdown(floatfmt=".3g"), end="\n\n", flush=True)
-    print("seconds of", "CPU time of this process" if uses_cpu_time() else "the wall clock")
+    print("seconds of the", clock_name())
