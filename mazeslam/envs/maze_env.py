@@ -138,15 +138,16 @@ class MazeEnv(DriveEnv):
         """Scan from the robot's true ``pose`` (into ``last_scan``) and mark the wall samples its
         noise-free beams land on (on the wall face a beam meets, the sample nearest to where it
         lands, always within ``WALL_SAMPLE_SPACING``); return how many are new."""
-        sensor_x, sensor_y = (float(value) for value in transform_points(pose, self.laser.mount))
+        sensor = pose[:2] if not any(self.laser.mount) else transform_points(pose, self.laser.mount)
+        sensor_x, sensor_y = float(sensor[0]), float(sensor[1])
         # The laser's own ray cast (as ``true_ranges``), with the wall each beam lands on.
         in_sight = self._in_sight.walls(sensor_x, sensor_y)
         ranges, walls, fractions = self.laser.caster.hits(sensor_x, sensor_y, float(pose[2]), in_sight)
         self.last_scan = self.simulated.read_scan(ranges).astype(np.float32)
         hit = walls >= 0
-        counts = self._sample_counts[walls[hit]]
+        walls, counts = walls[hit], self._sample_counts[walls[hit]]
         along = np.minimum((fractions[hit] * counts).astype(np.int64), counts - 1)
-        self.seen[self._sample_starts[walls[hit]] + along] = True
+        self.seen[self._sample_starts[walls] + along] = True
         before, self._seen_count = self._seen_count, int(np.count_nonzero(self.seen))
         return self._seen_count - before
 

@@ -88,11 +88,12 @@ class World:
         """Advance ``dt`` seconds with each wheel's ground contact travelling the given metres.
 
         Returns whether the robot touched a wall during the step."""
+        body = self.body
         speed = 0.5 * (left_travel + right_travel) / dt
         turn_rate = (right_travel - left_travel) / (self.robot.wheelbase * dt)
-        heading = self.body.angle + 0.5 * turn_rate * dt  # midpoint heading over the step
-        self.body.velocity = (speed * math.cos(heading), speed * math.sin(heading))
-        self.body.angular_velocity = turn_rate
+        heading = body.angle + 0.5 * turn_rate * dt  # midpoint heading over the step
+        body.velocity = (speed * math.cos(heading), speed * math.sin(heading))
+        body.angular_velocity = turn_rate
         self.space.step(dt)
         return self._push_out_of_walls()
 
