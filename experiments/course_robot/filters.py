@@ -41,6 +41,8 @@ FILTER_SEEDS = range(5)
 SIMULATION_SEEDS = range(201, 206)
 TABLE = HERE / "filters.csv"
 FILTER_NAMES = {MapKind.GRID: "grid filter", MapKind.LANDMARKS: "corner FastSLAM"}
+COLUMNS = ["log", "filter", "seed", "path", "sharpness_ratio", "extent_ratio", "ate_rmse_m"]
+COLUMNS += ["dead_reckoning_ate_rmse_m", "true_extent_ratio", "nees_median"]
 
 
 def estimate(run: LoadedRun, config: SlamConfig, kind: MapKind, seed: int) -> dict[str, tuple]:
@@ -77,7 +79,7 @@ def rows_for(run: LoadedRun, config: SlamConfig, log_name: str, seeds) -> list[d
                         nees = normalized_estimation_error(poses[moved], covariances[moved], run.truth[moved])
                         row["nees_median"] = nees_summary(nees)["median"]
                 rows.append(row)
-                pd.DataFrame([row]).to_csv(TABLE, mode="a", header=not TABLE.exists(), index=False)
+                pd.DataFrame([row], columns=COLUMNS).to_csv(TABLE, mode="a", header=not TABLE.exists(), index=False)
                 print(row, flush=True)
     return rows
 
