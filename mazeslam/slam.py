@@ -116,12 +116,15 @@ def run_fastslam(
         record = records[position]
         started = time.perf_counter()
         done: list[log.OdometryRecord | log.ScanRecord | log.LandmarkRecord]
+        moved = True  # the filter changed: its statistics are computed again (else the last ones hold)
         if isinstance(record, log.OdometryRecord):
-            if laser is None:  # else the laser odometry's increment at the next scan holds this motion
-                if abs(record.distance) > jump_tolerance:
-                    dropped.append(record)
-                else:
-                    slam.predict(record.distance, record.turn)
+            # No motion, or laser odometry (its increment at the next scan holds this motion): no change.
+            moved = laser is None and (record.distance != 0 or record.turn != 0)
+            if moved and abs(record.distance) > jump_tolerance:
+                dropped.append(record)
+                moved = False
+            elif moved:
+                slam.predict(record.distance, record.turn)
             done = [record]
         else:
             if isinstance(record, log.ScanRecord):
@@ -145,7 +148,8 @@ def run_fastslam(
                 snapshots.append((record.index, slam.poses.copy(), slam.landmarks()[0]))
             if on_update is not None:
                 on_update(record.index, slam)
-        mean, best, spread = slam.mean_pose(), slam.poses[slam.best_particle()], slam.pose_covariance()
+        if moved or position == 0:
+            mean, best, spread = slam.mean_pose(), slam.poses[slam.best_particle()], slam.pose_covariance()
         for finished in done:
             mean_poses[finished.index], best_poses[finished.index] = mean, best
             pose_covariances[finished.index] = spread
