@@ -194,14 +194,16 @@ def test_slam_figure_is_a_few_artists_not_one_per_item(monkeypatch, tmp_path):
     run = load_run(simulate(tmp_path / "run.log", seed=6, duration=20.0, progress=False).log_path)
     result = slam_on_run(run, progress=False)
     points = slam_report.scan_points_world(run.log, result.mean_poses, run.geometry)
+    from mazeslam.evaluation import plots
+
     drawn = {}
-    real_save = slam_report.save_figure
+    real_save = plots.save_figure
 
     def save(fig, ax, path, title=""):
         drawn.update(lines=len(ax.lines), patches=len(ax.patches), collections=len(ax.collections))
         return real_save(fig, ax, path, title)
 
-    monkeypatch.setattr(slam_report, "save_figure", save)
+    monkeypatch.setattr(plots, "save_figure", save)
     began = time.perf_counter()
     path = slam_report.plot_slam(tmp_path / "slam.png", result, points, run.truth, run.walls, "short", run.true_corners)
     seconds = time.perf_counter() - began

@@ -73,15 +73,14 @@ def plot_slam(
     """The exercise's figure: best particle's map with 2-sigma ellipses, particles in red, scan
     points in black, the estimated path; with truth, the true path (``truth_label``: a reference
     path is not truth), walls and landmarks too."""
-    import matplotlib
-
-    matplotlib.use("Agg")
+    # plots selects the file-only Agg backend when first imported; no switch here, at call time,
+    # where it would turn off a notebook's inline figures.
     import matplotlib.pyplot as plt
 
-    from mazeslam.evaluation.plots import draw_ellipses, draw_walls, save_figure
+    from mazeslam.evaluation import plots
 
     fig, ax = plt.subplots(figsize=(9, 7))
-    draw_walls(ax, walls)
+    plots.draw_walls(ax, walls)
     if len(points):  # one rasterised artist: thousands of points cost one image, not thousands of marks
         ax.plot(*points.T, ".", color="black", markersize=0.8, alpha=0.4, label="scan points", rasterized=True)
     if truth is not None:
@@ -99,7 +98,7 @@ def plot_slam(
     ax.plot(result.mean_poses[:, 0], result.mean_poses[:, 1], color="tab:blue", linewidth=1.2, label="FastSLAM path")
     particles = result.filter.poses
     ax.plot(particles[:, 0], particles[:, 1], ".", color="red", markersize=3, label="particles")
-    draw_ellipses(ax, result.landmarks, result.landmark_covariances)
+    plots.draw_ellipses(ax, result.landmarks, result.landmark_covariances)
     if len(result.landmarks):
         ax.plot(
             result.landmarks[:, 0],
@@ -112,7 +111,7 @@ def plot_slam(
     ax.set_aspect("equal")
     ax.set_xlabel("x [m]")
     ax.set_ylabel("y [m]")
-    return save_figure(fig, ax, path, title)
+    return plots.save_figure(fig, ax, path, title)
 
 
 def _ellipse(mean, covariance, sigmas: float = 2.0) -> Ellipse:
