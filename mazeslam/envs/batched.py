@@ -3,10 +3,11 @@
 The mazes are held as their solid-block grids (``walls.solid_blocks``): E grids of (2R+1, 2C+1)
 blocks sharing the block edges ``xs`` (2C+2,) and ``ys`` (2R+2,), metres. On them:
 
-* ``MazeGrids.cast``: one ray cast for every robot's beams. Each ray walks through its grid from
-  block to block across the nearer block edge (a digital differential analyser) until it enters a
-  solid block or passes ``max_range``: exact for the maze's axis-aligned thick walls, and cheap,
-  since a ray in a maze crosses few blocks before it meets a wall.
+* ``MazeGrids.cast``: one ray cast for every robot's beams. A ray can only enter a solid block
+  where it enters a wall band (cell interiors are free), and its entries into the bands along each
+  axis are evenly spaced along it: all rays look at a few of those crossings per pass, in numpy
+  arrays, until each has met a wall or passed ``max_range`` (``_BandCrossings``); exact for the
+  maze's axis-aligned thick walls, and cheap, since a ray in a maze meets a wall within few cells.
 * ``push_out``: robot discs pushed out of the solid blocks they overlap, along the
   shortest way out, as ``World`` does with pymunk's contacts: a disc slides along a wall it drives
   against and never passes through one (a step moves it much less than its radius).
@@ -28,7 +29,7 @@ from mazeslam.envs.walls import block_edges, solid_blocks
 #: reaches the next edge along that axis within any range).
 TINY_COMPONENT = 1e-12
 #: ``MazeGrids.cast`` looks at every band crossing within range in one pass when the rays times
-#: those crossings are at most this many (small casts: fewer passes), else at two per pass.
+#: those crossings are at most this many (small casts: fewer passes), else at three per pass.
 LOOK_ALL_BELOW = 16384
 #: Relative error allowed to the float32 distances of ``_BandCrossings`` (float32 rounding is 6e-8).
 FLOAT32_SLACK = 1e-6
@@ -99,7 +100,8 @@ class MazeGrids:
 
         A ray enters a solid block only where it enters a wall band (cell interiors are free), so
         only its crossings into the bands ``k s -+ t/2`` are looked at, a few per axis at a time
-        (``lookahead``) for all rays at once (see ``_BandCrossings``).
+        (``lookahead``) for all rays at once (see ``_BandCrossings``); with many rays, those that
+        leave their sensor's cell through a wall are settled first (``_BandCrossings.own_cell``).
         """
         count, beams = len(envs), len(bearings)
         origin = np.stack([x, y])[:, :, None]  # (2, K, 1), m
@@ -277,7 +279,6 @@ class _BandCrossings:
         self.thin = np.float32(grids.thickness / s)  # share of a cell's width a wall band takes
         self.across = np.array([width, 1], dtype=np.int32)[:, None, None]
         up = direction > 0
-        self.up = up.reshape(2, -1)  # (2, R) whether each ray moves up x, up y
         inverse = 1 / np.abs(direction)
         # Per sensor, axis and sense (last axis: down, up): q the origin's coordinate + t/2 along
         # the sense, and the first band entered that of line index ``sense * lines`` (its near face
@@ -332,9 +333,9 @@ class _BandCrossings:
             [solid[envs, i, j - 1], solid[envs, i, np.minimum(j + 1, solid.shape[2] - 1)]]
             + [solid[envs, i - 1, j], solid[envs, np.minimum(i + 1, solid.shape[1] - 1), j]]
         )
-        first = self.floats[0]
+        first, up = self.floats[0], self.ints[1] > 0  # (2, R): distances, whether moving up x, up y
         across_x = first[0] <= first[1]
-        side = np.where(across_x, self.up[0], 2 + self.up[1]).reshape(len(envs), -1)  # (K, N)
+        side = np.where(across_x, up[0], 2 + up[1]).reshape(len(envs), -1)  # (K, N)
         done = np.take_along_axis(beside, side, axis=1) & inside[:, None]
         return np.minimum(first[0], first[1]), across_x, done.ravel()
 
@@ -342,9 +343,7 @@ class _BandCrossings:
         """Keep the rays where ``keep`` (R,) holds, moved past their crossings nearer than ``limit``
         (m) (``look``ed at with ``lookahead`` and found free; none when 0)."""
         # (np.compress keeps the arrays C-contiguous, unlike a[..., keep].)
-        self.floats, self.ints, self.up = (
-            np.compress(keep, part, axis=-1) for part in (self.floats, self.ints, self.up)
-        )
+        self.floats, self.ints = np.compress(keep, self.floats, axis=-1), np.compress(keep, self.ints, axis=-1)
         if not lookahead:
             return
         first, spacing = self.floats[:2]
