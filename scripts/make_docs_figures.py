@@ -2,7 +2,7 @@
 
     python scripts/make_docs_figures.py                 # every figure (about 40 minutes on 2 cores)
     python scripts/make_docs_figures.py --skip-slow     # all but the ones over 3 minutes
-    python scripts/make_docs_figures.py log1_map maps_particles ...   # these only
+    python scripts/make_docs_figures.py course_robot_maps maps_particles ...   # these only
     python scripts/make_docs_figures.py --list          # the table below
     python scripts/make_docs_figures.py --check         # every image docs/*.md, README.md and
                                                         # experiments/ show is made by an entry
@@ -40,9 +40,6 @@ SLOW_MINUTES = 3.0
 #: (name, files written (space-separated globs), commands ("; " between them), about how many minutes)
 # fmt: off
 FIGURES: list[tuple[str, str, str, float]] = [
-    # docs/img. log1_map: the lead's experiments/course_robot/figures.py may take it over (change its command).
-    ("log1_map", "docs/img/log1_map.png", "mazeslam slam {log1} --config configs/course.toml --first-beam-angle 0 --out {tmp}/log1 --quiet; copy {tmp}/log1/slam.png docs/img/log1_map.png", 0.3),  # noqa: E501
-    ("log1_map_exercise_convention", "docs/img/log1_map_exercise_convention.png", "mazeslam slam {log1} --config configs/course.toml --out {tmp}/log1x --quiet; copy {tmp}/log1x/slam.png docs/img/log1_map_exercise_convention.png", 0.3),  # noqa: E501
     ("corners_simulated", "docs/img/corners_simulated.png", "mazeslam simulate --seed 0 --out {tmp}/doc.log --quiet; mazeslam corners {tmp}/doc.log --scan 60 --plot docs/img/corners_simulated.png", 0.3),  # noqa: E501
     ("corners_csail", "docs/img/corners_csail.png", "mazeslam corners {carmen}/csail-corrected.log.gz --config configs/corners/carmen.toml --scan 254 --plot docs/img/corners_csail.png", 0.2),  # noqa: E501
     ("corners_freiburg079", "docs/img/corners_freiburg079.png", "mazeslam corners {carmen}/freiburg-079-corrected.log.gz --config configs/corners/carmen.toml --scan 2926 --plot docs/img/corners_freiburg079.png", 0.3),  # noqa: E501
@@ -57,7 +54,7 @@ FIGURES: list[tuple[str, str, str, float]] = [
     ("consistency", "experiments/consistency/nees_over_time.png experiments/consistency/results.csv experiments/consistency/summary.md", "python experiments/consistency/run.py", 20.0),  # noqa: E501
     ("carmen_grid", "experiments/carmen_grid/results/*_compare.png", "python experiments/carmen_grid/figures.py", 0.2),  # noqa: E501
     ("course_robot_sensor", "experiments/course_robot/sensor_comparison.png", "python experiments/course_robot/sensor_comparison.py", 1.0),  # noqa: E501
-    ("course_robot_maps", "docs/img/course_log1_maps.png docs/img/course_sim_maps.png", "python experiments/course_robot/figures.py", 1.0),  # noqa: E501
+    ("course_robot_maps", "docs/img/course_log1_maps.png docs/img/course_sim_maps.png", "python experiments/course_robot/figures.py", 3.0),  # noqa: E501
     ("maps_particles", "experiments/particles/results/*.png", "mazeslam report experiments/particles/results", 0.1),  # noqa: E501
     ("maps_odometry_variance", "experiments/odometry_variance/results/*.png", "mazeslam report experiments/odometry_variance/results", 0.1),  # noqa: E501
     ("maps_sensor_variance", "experiments/sensor_variance/results/*.png", "mazeslam report experiments/sensor_variance/results", 0.1),  # noqa: E501

@@ -4,12 +4,13 @@ biased wheel odometry; the filter must close the loop with a map that matches th
 import numpy as np
 import pytest
 
+from mazeslam import log
 from mazeslam.config import from_mapping
 from mazeslam.evaluation.metrics import absolute_trajectory_error, align_se2, apply_se2
 from mazeslam.filters.motion import dead_reckoning
-from mazeslam.geometry import compose, relative
+from mazeslam.geometry import advance_pose, compose, relative
 from mazeslam.grid import GridSlamParams, run_grid_slam
-from mazeslam.grid.filter import scan_motions
+from mazeslam.grid.filter import odometry_at_record_times, scan_motions
 from mazeslam.grid.map_io import OCCUPIED, grid_states
 from mazeslam.grid.synthetic import building_walls, simulate_building_log
 from mazeslam.log import read
@@ -75,6 +76,18 @@ def test_the_settings_load_from_a_toml_section_and_the_wheels_give_the_motion(bu
         "[grid]",
     )
     assert params.grid.resolution == 0.1 and params.laser_odometry.enabled
-    motions = scan_motions(course_log, simulated.geometry, params)
+    motions = scan_motions(course_log, simulated.geometry, params, simulated.start_pose)
     chained = dead_reckoning(course_log, simulated.start_pose)[np.flatnonzero(course_log.is_scan)]
     np.testing.assert_allclose(relative(chained[:-1], chained[1:]), motions[1:], atol=1e-9)
+
+
+def test_a_scan_between_odometry_records_gets_the_share_of_the_motion_its_time_says():
+    # Odometry at 0.2 s and 0.4 s (each 0.02 m and 0.1 rad), a scan at 0.35 s: three quarters of
+    # the way through the second record's motion.
+    text = "0.2 0 0.02 0.1 -1 -1\n0.35 1 0.5 0.5 0.5 0.5\n0.4 0 0.02 0.1 -1 -1\n"
+    course_log = log.parse(text)
+    poses = odometry_at_record_times(course_log, (1.0, 2.0, 0.0))
+    first = advance_pose(np.array([1.0, 2.0, 0.0]), 0.02, 0.1)
+    np.testing.assert_allclose(poses[0], first)
+    np.testing.assert_allclose(poses[1], advance_pose(first, 0.015, 0.075))
+    np.testing.assert_allclose(poses[2], advance_pose(first, 0.02, 0.1))
