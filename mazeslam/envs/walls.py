@@ -155,7 +155,11 @@ class WallsInSight:
 
     def walls(self, x: float, y: float) -> np.ndarray:
         """Indices of the surfaces a beam from (x, y) (m) can meet first."""
-        cell = self.maze.cell_of(x, y)
+        maze = self.maze  # the cell (row, col) of (x, y) as ``Maze.cell_of``, in plain floats
+        cell = (
+            min(max(math.floor(y / maze.cell_size), 0), maze.rows - 1),
+            min(max(math.floor(x / maze.cell_size), 0), maze.cols - 1),
+        )
         if cell not in self._cache:
             joined = set().union(*(self._monotone(cell, up, right) for up in (1, -1) for right in (1, -1)))
             self._cache[cell] = np.flatnonzero(self._touches[[r * self.maze.cols + c for r, c in joined]].any(axis=0))
