@@ -117,8 +117,8 @@ class MazeGrids:
             lookahead = self._crossings_in_range(max_range)
             hit, hit_x, done, limit = crossings.look(lookahead, max_range)
         while True:
-            distances[active[done]] = hit[done]
-            across_x[active[done]] = hit_x[done]
+            settled = active[done]
+            distances[settled], across_x[settled] = hit[done], hit_x[done]
             if done.all():
                 break
             active = active[~done]
@@ -150,15 +150,16 @@ class MazeGrids:
         s, half = self.cell_size, self.thickness / 2
         origin, other = (np.where(across_x, origin[k], origin[1 - k]) for k in (0, 1))
         normal, sideways = (np.where(across_x, direction[k], direction[1 - k]) for k in (0, 1))
-        finite = np.isfinite(distances)
+        missed = np.isinf(distances)
         # The face of band k is on k s - t/2 (entered moving up) or k s + t/2 (moving down):
         # block edge 2k or 2k + 1.
-        reached = origin + np.where(finite, distances, 0.0) * normal
-        edge = 2 * np.rint((reached + np.where(normal > 0, half, -half)) / s).astype(np.int64) + (normal < 0)
+        reached = origin + np.where(missed, 0.0, distances) * normal
+        edge = 2 * np.rint((reached + np.copysign(half, normal)) / s).astype(np.int64) + (normal < 0)
         edges = np.concatenate([self.xs, self.ys])
         position = edges[np.clip(np.where(across_x, edge, len(self.xs) + edge), 0, len(edges) - 1)]
-        exact = np.where(finite, (position - origin) / normal, np.inf)
-        along = other + np.where(finite, exact, 0.0) * sideways
+        exact = (position - origin) / normal
+        along = other + exact * sideways
+        exact[missed] = np.inf
         return np.where(across_x, edge, -1 - edge), along, exact
 
     # -- wall faces seen --------------------------------------------------------------------
