@@ -54,7 +54,7 @@ def draw(run: LoadedRun, config: SlamConfig, title: str, out: Path) -> Path:
     """One panel per path: the scan returns placed along it, the path, and the truth when there is one."""
     paths = paths_of(run, config)
     fig, axes = plt.subplots(
-        1, len(paths), figsize=(5.2 * len(paths), 5.4), sharex=True, sharey=True, layout="constrained"
+        1, len(paths), figsize=(5.2 * len(paths), 6.2), sharex=True, sharey=True, layout="constrained"
     )
     for ax, (name, poses) in zip(axes, paths.items()):
         sharp = map_sharpness(run, poses, config.odometry.jump_tolerance)

@@ -41,22 +41,27 @@ FILTER_SEEDS = range(5)
 SIMULATION_SEEDS = range(201, 206)
 TABLE = HERE / "filters.csv"
 FILTER_NAMES = {MapKind.GRID: "grid filter", MapKind.LANDMARKS: "corner FastSLAM"}
-COLUMNS = ["log", "filter", "seed", "path", "sharpness_ratio", "extent_ratio", "ate_rmse_m"]
+COLUMNS = ["log", "filter", "seed", "path", "sharpness_ratio", "extent_ratio", "final_cloud_max_m", "ate_rmse_m"]
 COLUMNS += ["dead_reckoning_ate_rmse_m", "true_extent_ratio", "nees_median"]
 
 
-def estimate(run: LoadedRun, config: SlamConfig, kind: MapKind, seed: int) -> dict[str, tuple]:
+def estimate(run: LoadedRun, config: SlamConfig, kind: MapKind, seed: int) -> tuple[dict[str, tuple], float]:
     """The mean path (R, 3) with its covariances (R, 3, 3) and the best particle's path (R, 3, no
-    covariance) of one filter run over every record of ``run``."""
+    covariance) of one filter run over every record of ``run``; and how far the farthest particle
+    of the final cloud is from its weighted mean, m (a split cloud: far)."""
     if kind == MapKind.GRID:
         result = grid_on_run(run, dataclasses.replace(config, grid=dataclasses.replace(config.grid, seed=seed)))
-        return {
-            "mean": result.record_trajectory(which="mean"),
-            "best": (result.record_trajectory()[0], None),
-        }
+        paths = {"mean": result.record_trajectory(which="mean"), "best": (result.record_trajectory()[0], None)}
+        return paths, _farthest(result.particles.poses, result.particles.weights)
     corners = dataclasses.replace(config, fastslam=dataclasses.replace(config.fastslam, seed=seed))
-    result = slam_on_run(run, corners, progress=False)
-    return {"mean": (result.mean_poses, result.pose_covariances), "best": (result.best_poses, None)}
+    landmarks = slam_on_run(run, corners, progress=False)
+    paths = {"mean": (landmarks.mean_poses, landmarks.pose_covariances), "best": (landmarks.best_poses, None)}
+    return paths, _farthest(landmarks.filter.poses, landmarks.filter.weights())
+
+
+def _farthest(poses: np.ndarray, weights: np.ndarray) -> float:
+    """The largest distance (m) of the particles ``poses`` (P, 3) from their ``weights``-weighted mean position."""
+    return float(np.hypot(*(poses[:, :2] - weights @ poses[:, :2]).T).max())
 
 
 def rows_for(run: LoadedRun, config: SlamConfig, log_name: str, seeds) -> list[dict]:
@@ -66,10 +71,15 @@ def rows_for(run: LoadedRun, config: SlamConfig, log_name: str, seeds) -> list[d
     rows = []
     for kind in (MapKind.GRID, MapKind.LANDMARKS):
         for seed in seeds:
-            for path_name, (poses, covariances) in estimate(run, config, kind, seed).items():
+            paths, farthest = estimate(run, config, kind, seed)
+            for path_name, (poses, covariances) in paths.items():
                 sharp = map_sharpness(run, poses, tolerance)
                 row = {"log": log_name, "filter": FILTER_NAMES[kind], "seed": seed, "path": path_name}
-                row |= {"sharpness_ratio": sharp.ratio, "extent_ratio": sharp.extent_ratio}
+                row |= {
+                    "sharpness_ratio": sharp.ratio,
+                    "extent_ratio": sharp.extent_ratio,
+                    "final_cloud_max_m": farthest,
+                }
                 if run.truth is not None:
                     row["ate_rmse_m"] = absolute_trajectory_error(poses, run.truth)["rmse"]
                     row["dead_reckoning_ate_rmse_m"] = absolute_trajectory_error(reckoned, run.truth)["rmse"]
