@@ -27,7 +27,7 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from mazeslam import log
-from mazeslam.beams import BeamGeometry
+from mazeslam.beams import BeamGeometry, SensorOverrides
 from mazeslam.geometry import advance_pose, compose, relative, wrap_angle
 from mazeslam.loaded_run import LoadedRun
 
@@ -227,11 +227,37 @@ def describe(detection: Detection) -> list[str]:
     ]
 
 
+#: The file in a command's output folder that keeps the beam convention detected for its log.
+CACHE_NAME = "beam_convention.json"
 #: A detected first-beam angle within this many degrees of a quarter turn is taken as that turn:
 #: loggers put beam 0 forward, behind or sideways, and the detection's grid and noise are ~1 deg.
 SNAP_DEGREES = 3.0
 #: Below this margin (runner-up's score over the best's) the detection is inconclusive.
 CONCLUSIVE_MARGIN = 1.2
+
+
+def convention_given(sensor: SensorOverrides) -> bool:
+    """The settings (config or command line) give the beam convention: first-beam angle or direction."""
+    return sensor.first_beam_angle is not None or sensor.direction is not None
+
+
+def with_detected_convention(
+    run: LoadedRun,
+    sensor: SensorOverrides,
+    min_range: float = 0.0,
+    max_range: float = math.inf,
+    jump_tolerance: float = math.inf,
+    cache_folder: Path | None = None,
+) -> LoadedRun:
+    """``run`` with its beam convention detected from its scans (``detected_geometry``, cached as
+    ``CACHE_NAME`` in ``cache_folder``) when nothing says it: a full-circle log with no sidecar and
+    no convention in ``sensor``. Otherwise ``run`` as it is."""
+    full_circle = run.geometry.is_full_circle and run.log.n_beams is not None and run.log.is_scan.sum() > 1
+    if not full_circle or run.geometry_from_sidecar or convention_given(sensor):
+        return run
+    cache = Path(cache_folder) / CACHE_NAME if cache_folder is not None else None
+    geometry, origin = detected_geometry(run, min_range, max_range, jump_tolerance, cache)
+    return dataclasses.replace(run, geometry=geometry, geometry_origin=origin)
 
 
 def detected_geometry(

@@ -344,6 +344,13 @@ def corners(
 )
 @click.option("--version", "version", type=click.Choice(["1", "2"]), help="FastSLAM 1.0 or 2.0.")
 @click.option(
+    "--map",
+    "map_kind",
+    type=click.Choice(["landmarks", "grid"]),
+    help="What the particles map [default: the config's [map] kind, landmarks]: landmarks (corner FastSLAM) "
+    "or grid (an occupancy grid each, gmapping's filter).",
+)
+@click.option(
     "--animate",
     is_flag=True,
     help="Also write the run as an animation (particles, map, current scan and corners over time): "
@@ -365,6 +372,7 @@ def slam(
     seed,
     association,
     version,
+    map_kind,
     animate,
     live,
     first_beam_angle,
@@ -396,6 +404,7 @@ def slam(
         not quiet,
         live=live,
         echo=lambda message: click.echo(message, err=True),
+        map_kind=map_kind,
     )
     click.echo("\n".join(lines))
     click.echo(f"results in {out_dir}")
@@ -574,6 +583,7 @@ def sweep(sweep_file, out_dir, workers, scheduler, quiet):
 def calibrate(log_file, config_path, write_path, first_beam_angle, beam_direction, mount_x, quiet):
     """Measure a log's noise (laser range, odometry, corner observations) as filter settings:
     against the truth beside it when there is one, else against the filter's own path and map."""
+    from mazeslam.beam_detection import with_detected_convention
     from mazeslam.evaluation.calibration import calibrate as measure
     from mazeslam.loaded_run import load_run
     from mazeslam.slam import load_slam_config
@@ -581,7 +591,10 @@ def calibrate(log_file, config_path, write_path, first_beam_angle, beam_directio
     if write_path:
         prepare_output_file(write_path)
     config = load_slam_config(config_path)
-    run = load_run(log_file, _geometry_overrides(first_beam_angle, beam_direction, mount_x).over(config.sensor))
+    sensor = _geometry_overrides(first_beam_angle, beam_direction, mount_x).over(config.sensor)
+    run = load_run(log_file, sensor)
+    corners, jump_tolerance = config.corners, config.odometry.jump_tolerance
+    run = with_detected_convention(run, sensor, corners.min_range, corners.max_range, jump_tolerance)
     try:
         lines = measure(run, config, progress=not quiet).settings()
     except ValueError as error:

@@ -7,7 +7,7 @@ import time
 from pathlib import Path
 
 from mazeslam import sidecars
-from mazeslam.beam_detection import convention_warning, detected_geometry
+from mazeslam.beam_detection import convention_given, convention_warning, with_detected_convention
 from mazeslam.beams import SensorOverrides
 from mazeslam.config import with_changes
 from mazeslam.evaluation import slam_report
@@ -21,8 +21,6 @@ from mazeslam.loaded_run import LoadedRun, load_run
 from mazeslam.slam import MapKind, SlamConfig, SlamResult, load_slam_config, slam_on_run
 from mazeslam.smooth_command import optimum_columns, optimum_line
 
-#: The file in a run's output folder that keeps the beam convention detected for its log.
-BEAM_CACHE = "beam_convention.json"
 #: About how many frames ``--animate`` draws, whatever the log's length.
 ANIMATION_FRAMES = 150
 
@@ -37,28 +35,32 @@ def run_slam_command(
     progress=True,
     live=False,
     echo=None,
+    map_kind: str | None = None,
 ) -> list[str]:
     """Run, write ``out_dir``/{trajectory.csv, best_trajectory.csv, map.json, slam.png, occupancy.pgm/.yaml/.png,
     landmarks.csv[, slam.gif]};
     return the lines to print. ``filter_changes`` replace ``[fastslam]`` settings and ``sensor``
     the ``[sensor]`` ones (None values: keep the config's). ``live``: draw the filter as it runs
-    (``mazeslam.live``; its note when there is no window goes to ``echo`` at once, and to the lines)."""
+    (``mazeslam.live``; its note when there is no window goes to ``echo`` at once, and to the lines).
+    ``map_kind`` replaces ``[map] kind``; the particle count and seed go to the filter that runs."""
     config = load_slam_config(config_path)
+    filter_changes = filter_changes or {}
     config = dataclasses.replace(
         config,
-        fastslam=with_changes(config.fastslam, **(filter_changes or {})),
+        map=with_changes(config.map, kind=map_kind),
+        fastslam=with_changes(config.fastslam, **filter_changes),
+        grid=with_changes(config.grid, particles=filter_changes.get("NPARTICLES"), seed=filter_changes.get("seed")),
         sensor=(sensor or SensorOverrides()).over(config.sensor),
     )
     run = load_run(log_file, config.sensor)
-    if _detects_convention(run, config):
-        geometry, origin = detected_geometry(
-            run,
-            config.corners.min_range,
-            config.corners.max_range,
-            config.odometry.jump_tolerance,
-            cache=Path(out_dir) / BEAM_CACHE,
-        )
-        run = dataclasses.replace(run, geometry=geometry, geometry_origin=origin)
+    run = with_detected_convention(
+        run,
+        config.sensor,
+        config.corners.min_range,
+        config.corners.max_range,
+        config.odometry.jump_tolerance,
+        cache_folder=Path(out_dir),
+    )
     if config.map.kind == MapKind.GRID:
         from mazeslam.grid_command import run_grid_command
 
@@ -187,7 +189,7 @@ def _run_lines(run: LoadedRun, config: SlamConfig, result: SlamResult, matching_
             "intervals without odometry records (matched by correlative search): "
             f"{int((~laser.had_odometry[1:]).sum())}"
         )
-    if _user_convention(config) and not run.geometry_from_sidecar and course_log.is_scan.sum() > 1:
+    if convention_given(config.sensor) and not run.geometry_from_sidecar and course_log.is_scan.sum() > 1:
         warning = convention_warning(
             course_log, run.geometry, config.corners.min_range, config.corners.max_range, config.odometry.jump_tolerance
         )
@@ -204,17 +206,6 @@ def _run_lines(run: LoadedRun, config: SlamConfig, result: SlamResult, matching_
         f"{checks['largest_path_step_m']:.3f} m"
     )
     return lines
-
-
-def _user_convention(config: SlamConfig) -> bool:
-    """The config or the command line gives the beam convention (first-beam angle or direction)."""
-    return config.sensor.first_beam_angle is not None or config.sensor.direction is not None
-
-
-def _detects_convention(run: LoadedRun, config: SlamConfig) -> bool:
-    """A full-circle log with no recorded and no given convention: it is detected from the scans."""
-    full_circle = run.geometry.is_full_circle and run.log.n_beams is not None
-    return full_circle and not run.geometry_from_sidecar and not _user_convention(config) and run.log.is_scan.sum() > 1
 
 
 def _uncertainty_lines(nis: dict, nees: dict | None) -> list[str]:

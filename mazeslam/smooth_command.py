@@ -28,6 +28,7 @@ import matplotlib.pyplot as plt
 import numpy as np
 
 from mazeslam import sidecars
+from mazeslam.beam_detection import with_detected_convention
 from mazeslam.beams import SensorOverrides
 from mazeslam.config import InputError, jsonable, read_text
 from mazeslam.evaluation.consistency import nees_summary
@@ -166,6 +167,14 @@ def run_smooth_command(
     config = load_slam_config(config_path)
     config = dataclasses.replace(config, sensor=(sensor or SensorOverrides()).over(config.sensor))
     run = load_run(log_file, config.sensor)
+    run = with_detected_convention(
+        run,
+        config.sensor,
+        config.corners.min_range,
+        config.corners.max_range,
+        config.odometry.jump_tolerance,
+        cache_folder=Path(out_dir),
+    )
     radius = config.evaluation.match_radius
     if association == "known":
         if run.truth is None or not len(run.true_corners):

@@ -55,3 +55,15 @@ def test_corner_fastslam_does_not_close_that_loop(building):
     result = slam_on_run(run, SlamConfig(), progress=False)
     final_error = np.hypot(*(result.mean_poses[-1, :2] - simulated.truth[-1, :2]))
     assert final_error > 0.5  # corridors without corners: the corners give the filter nothing to hold on to
+
+
+def test_the_map_option_picks_the_filter_and_the_particles_go_to_the_one_that_runs(building, tmp_path):
+    simulated, config = building  # a config whose [map] kind is "grid"
+    options = ["slam", str(simulated.path), "--config", str(config), "--quiet", "--particles", "3", "--seed", "2"]
+    result = CliRunner().invoke(main, [*options, "--out", str(tmp_path / "grid")])
+    assert result.exit_code == 0, result.output
+    assert "grid filter: 3 particles" in result.output
+    assert json.loads((tmp_path / "grid" / "map.json").read_text())["parameters"]["seed"] == 2
+    result = CliRunner().invoke(main, [*options, "--map", "landmarks", "--out", str(tmp_path / "corners")])
+    assert result.exit_code == 0, result.output
+    assert "FastSLAM: 3 particles" in result.output
