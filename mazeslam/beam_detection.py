@@ -22,6 +22,7 @@ import json
 import math
 from dataclasses import dataclass
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 from scipy.spatial import cKDTree
@@ -30,6 +31,9 @@ from mazeslam import log
 from mazeslam.beams import BeamGeometry, SensorOverrides
 from mazeslam.geometry import advance_pose, compose, relative, wrap_angle
 from mazeslam.loaded_run import LoadedRun
+
+if TYPE_CHECKING:
+    from mazeslam.slam import SlamConfig
 
 
 @dataclass(frozen=True)
@@ -241,22 +245,17 @@ def convention_given(sensor: SensorOverrides) -> bool:
     return sensor.first_beam_angle is not None or sensor.direction is not None
 
 
-def with_detected_convention(
-    run: LoadedRun,
-    sensor: SensorOverrides,
-    min_range: float = 0.0,
-    max_range: float = math.inf,
-    jump_tolerance: float = math.inf,
-    cache_folder: Path | None = None,
-) -> LoadedRun:
-    """``run`` with its beam convention detected from its scans (``detected_geometry``, cached as
-    ``CACHE_NAME`` in ``cache_folder``) when nothing says it: a full-circle log with no sidecar and
-    no convention in ``sensor``. Otherwise ``run`` as it is."""
+def with_detected_convention(run: LoadedRun, config: SlamConfig, cache_folder: Path | None = None) -> LoadedRun:
+    """``run`` with its beam convention detected from its scans (``detected_geometry`` with
+    ``config``'s corner ranges and jump tolerance, cached as ``CACHE_NAME`` in ``cache_folder``) when
+    nothing says it: a full-circle log with no sidecar and no convention in ``config.sensor``.
+    Otherwise ``run`` as it is."""
     full_circle = run.geometry.is_full_circle and run.log.n_beams is not None and run.log.is_scan.sum() > 1
-    if not full_circle or run.geometry_from_sidecar or convention_given(sensor):
+    if not full_circle or run.geometry_from_sidecar or convention_given(config.sensor):
         return run
     cache = Path(cache_folder) / CACHE_NAME if cache_folder is not None else None
-    geometry, origin = detected_geometry(run, min_range, max_range, jump_tolerance, cache)
+    corners, jump_tolerance = config.corners, config.odometry.jump_tolerance
+    geometry, origin = detected_geometry(run, corners.min_range, corners.max_range, jump_tolerance, cache)
     return dataclasses.replace(run, geometry=geometry, geometry_origin=origin)
 
 

@@ -591,10 +591,10 @@ def calibrate(log_file, config_path, write_path, first_beam_angle, beam_directio
     if write_path:
         prepare_output_file(write_path)
     config = load_slam_config(config_path)
-    sensor = _geometry_overrides(first_beam_angle, beam_direction, mount_x).over(config.sensor)
-    run = load_run(log_file, sensor)
-    corners, jump_tolerance = config.corners, config.odometry.jump_tolerance
-    run = with_detected_convention(run, sensor, corners.min_range, corners.max_range, jump_tolerance)
+    config = dataclasses.replace(
+        config, sensor=_geometry_overrides(first_beam_angle, beam_direction, mount_x).over(config.sensor)
+    )
+    run = with_detected_convention(load_run(log_file, config.sensor), config)
     try:
         lines = measure(run, config, progress=not quiet).settings()
     except ValueError as error:

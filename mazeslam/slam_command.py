@@ -53,14 +53,7 @@ def run_slam_command(
         sensor=(sensor or SensorOverrides()).over(config.sensor),
     )
     run = load_run(log_file, config.sensor)
-    run = with_detected_convention(
-        run,
-        config.sensor,
-        config.corners.min_range,
-        config.corners.max_range,
-        config.odometry.jump_tolerance,
-        cache_folder=Path(out_dir),
-    )
+    run = with_detected_convention(run, config, cache_folder=Path(out_dir))
     if config.map.kind == MapKind.GRID:
         from mazeslam.grid_command import run_grid_command
 

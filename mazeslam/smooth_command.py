@@ -167,14 +167,7 @@ def run_smooth_command(
     config = load_slam_config(config_path)
     config = dataclasses.replace(config, sensor=(sensor or SensorOverrides()).over(config.sensor))
     run = load_run(log_file, config.sensor)
-    run = with_detected_convention(
-        run,
-        config.sensor,
-        config.corners.min_range,
-        config.corners.max_range,
-        config.odometry.jump_tolerance,
-        cache_folder=Path(out_dir),
-    )
+    run = with_detected_convention(run, config, cache_folder=Path(out_dir))
     radius = config.evaluation.match_radius
     if association == "known":
         if run.truth is None or not len(run.true_corners):
