@@ -117,16 +117,16 @@ def evaluate(name: str, seeds: int, out: Path) -> dict:
 
 def beside_the_reference_picture(path: Path, points: np.ndarray, picture: Path, name: str) -> None:
     """Our scans, placed by FastSLAM, beside the map picture that comes with the log."""
-    fig, (ours, theirs) = plt.subplots(1, 2, figsize=(11, 5))
-    ours.plot(points[:, 0], points[:, 1], ",", color="black", alpha=0.5)
+    fig, (ours, theirs) = plt.subplots(1, 2, figsize=(11, 5.5), layout="constrained")
+    ours.plot(points[:, 0], points[:, 1], ",", color="black", alpha=0.5, label="laser returns, placed by FastSLAM")
     ours.set_aspect("equal")
-    ours.set_title(f"{name}: scans placed by FastSLAM")
+    ours.set_title(f"{name}: scans placed by FastSLAM (corner map)")
     ours.set_xlabel("x [m]")
     ours.set_ylabel("y [m]")
+    ours.legend(loc="upper left", fontsize=8, markerscale=20)
     theirs.imshow(plt.imread(picture), cmap="gray")
-    theirs.set_title("the map picture beside the log")
+    theirs.set_title("the map picture that comes with the log (no scale)")
     theirs.axis("off")
-    fig.tight_layout()
     fig.savefig(path, dpi=90)
     plt.close(fig)
 
