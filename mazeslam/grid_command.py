@@ -17,8 +17,7 @@ from mazeslam.config import jsonable
 from mazeslam.evaluation.consistency import POSE_BOUND_95, nees_summary
 from mazeslam.evaluation.metrics import normalized_estimation_error
 from mazeslam.evaluation.scoring import DEAD_RECKONING, error_table
-from mazeslam.evaluation.sharpness import map_sharpness, sharpness_line
-from mazeslam.filters.motion import dead_reckoning
+from mazeslam.evaluation.sharpness import dead_reckoning_without_glitches, map_sharpness, sharpness_line
 from mazeslam.grid.filter import GridSlamParams, GridSlamResult, run_grid_slam
 from mazeslam.grid.map_io import grid_states, write_map
 from mazeslam.loaded_run import LoadedRun
@@ -94,7 +93,7 @@ def run_grid_command(run: LoadedRun, config: SlamConfig, out_dir: Path, progress
     lines += ["  " + sharpness_line(name, value) for name, value in sharpness.items()]
     document["sharpness"] = {name: value.to_dict() for name, value in sharpness.items()}
     if run.truth is not None:
-        table, nees = _errors(run, result)
+        table, nees = _errors(run, result, config.odometry.jump_tolerance)
         lines += [
             f"Errors against {run.truth_label}, at the scans: ATE [m] (aligned: after the best rigid motion); "
             f"pose NEES median {nees['median']:.2f}, {100 * (nees['inside_95'] or 0):.0f} % inside "
@@ -108,15 +107,15 @@ def run_grid_command(run: LoadedRun, config: SlamConfig, out_dir: Path, progress
     return lines + ["wrote " + ", ".join(str(p) for p in paths.values())]
 
 
-def _errors(run: LoadedRun, result: GridSlamResult):
-    """The error table at the scans (dead reckoning and the filter's mean and best paths against
-    the truth) and the mean path's NEES summary."""
+def _errors(run: LoadedRun, result: GridSlamResult, jump_tolerance: float):
+    """The error table at the scans (dead reckoning with the glitches left out, the filter's mean and
+    best paths against the truth) and the mean path's NEES summary."""
     assert run.truth is not None
     records = result.scan_records
     truth = run.truth[records]
     table = error_table(
         {
-            DEAD_RECKONING: dead_reckoning(run.log, run.start_pose)[records],
+            DEAD_RECKONING: dead_reckoning_without_glitches(run, jump_tolerance)[records],
             GRID_MEAN: result.mean_poses,
             GRID_BEST: result.best_poses,
         },

@@ -112,8 +112,12 @@ class LoadedRun:
 
     def log_without_glitches(self, jump_tolerance: float) -> CourseLog:
         """The log with the glitches' odometry (``glitches``) set to no motion, as the filter moves."""
+        return self.log_without(self.glitches(jump_tolerance))
+
+    def log_without(self, records) -> CourseLog:
+        """The log with the odometry of ``records`` (indices) set to no motion."""
         values = self.log.values.copy()
-        values[self.glitches(jump_tolerance), :2] = 0.0
+        values[np.asarray(records, dtype=int), :2] = 0.0
         return dataclasses.replace(self.log, values=values)
 
 

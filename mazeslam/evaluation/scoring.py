@@ -100,7 +100,9 @@ def score_run(run: LoadedRun, result: SlamResult, match_radius: float = 0.05) ->
     laser = result.laser_odometry
     records = laser.scan_records if laser is not None else np.arange(len(run.log))
     truth = run.truth[records]
-    estimates = {DEAD_RECKONING: dead_reckoning(run.log, run.start_pose)[records]}
+    # Dead reckoning leaves out the odometry records the filter left out (glitches), as the filter moves.
+    reckoned = dead_reckoning(run.log_without([r.index for r in result.dropped_odometry]), run.start_pose)
+    estimates = {DEAD_RECKONING: reckoned[records]}
     if laser is not None:
         estimates["laser odometry"] = laser.poses(run.start_pose)
     mean = result.mean_poses[records]
