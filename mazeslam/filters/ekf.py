@@ -11,6 +11,9 @@ from __future__ import annotations
 import numpy as np
 
 TWO_PI = 2.0 * np.pi
+#: Batches at least this large are computed entry by entry (a few passes over memory); smaller ones
+#: with numpy's batched ``matmul`` (a few calls: few particles cost little more than the calls).
+ENTRYWISE_FROM = 64
 
 
 def wrap(angle: np.ndarray) -> np.ndarray:
@@ -61,9 +64,11 @@ def update(
     Returns the updated means (n, d) and covariances (n, d, d) (Joseph form: symmetric and
     positive definite), and the innovation covariances S = H P H^T + R (n, k, k).
 
-    The matrices are tiny (d, k <= 3), so the algebra is written entry by entry over the batch
+    The matrices are tiny (d, k <= 3), so for a large batch the algebra is written entry by entry
     (each entry an (n,) array): several times faster than batched ``matmul`` and ``inv``.
     """
+    if len(mean) < ENTRYWISE_FROM:
+        return _update_batched(mean, covariance, residual, jacobian, noise)
     n, d = mean.shape
     p, h = _entries(covariance), _entries(jacobian)
     r = _entries(np.broadcast_to(noise, (n, *np.shape(noise)[-2:])))
@@ -79,9 +84,22 @@ def update(
     return new_mean, _array(new_covariance), _array(s)
 
 
+def _update_batched(mean, covariance, residual, jacobian, noise):
+    """``update`` with batched ``matmul`` and ``inv`` (for small batches)."""
+    h_t = np.swapaxes(jacobian, -1, -2)
+    s = jacobian @ covariance @ h_t + noise
+    gain = covariance @ h_t @ np.linalg.inv(s)  # (n, d, k)
+    new_mean = mean + np.einsum("nij,nj->ni", gain, residual)
+    identity_minus = np.eye(mean.shape[1]) - gain @ jacobian
+    joseph = identity_minus @ covariance @ np.swapaxes(identity_minus, -1, -2)
+    return new_mean, joseph + gain @ noise @ np.swapaxes(gain, -1, -2), s
+
+
 def congruence(matrix: np.ndarray, transform: np.ndarray) -> np.ndarray:
     """``A M A^T`` (n, r, r) of a batch of transforms A (n, r, c) and matrices M (c, c) or
-    (n, c, c) (covariance propagation), entry by entry like ``update``."""
+    (n, c, c) (covariance propagation), entry by entry like ``update`` for a large batch."""
+    if len(transform) < ENTRYWISE_FROM:
+        return transform @ matrix @ np.swapaxes(transform, -1, -2)
     a = _entries(transform)
     m = _entries(np.broadcast_to(matrix, (len(transform), *np.shape(matrix)[-2:])))
     return _array(_product(_product(a, m), _transpose(a)))
