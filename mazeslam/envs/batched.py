@@ -18,7 +18,7 @@ blocks sharing the block edges ``xs`` (2C+2,) and ``ys`` (2R+2,), metres. On the
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -28,9 +28,9 @@ from mazeslam.envs.walls import block_edges, solid_blocks
 #: Smallest |direction component| of a ray; smaller ones are raised to it (the ray then never
 #: reaches the next edge along that axis within any range).
 TINY_COMPONENT = 1e-12
-#: ``MazeGrids.cast`` looks at every band crossing within range in one pass when the rays times
-#: those crossings are at most this many (small casts: fewer passes), else at three per pass.
-LOOK_ALL_BELOW = 16384
+#: Band crossings per axis ``MazeGrids.cast`` looks at per pass, for the rays not settled in their
+#: sensor's cell.
+LOOKAHEAD = 2
 #: Relative error allowed to the float32 distances of ``_BandCrossings`` (float32 rounding is 6e-8).
 FLOAT32_SLACK = 1e-6
 
@@ -43,6 +43,7 @@ class MazeGrids:
         solid: (E, 2R+1, 2C+1) bool, block [e, i, j] of maze e (i along y, j along x) is solid.
         xs: (2C+2,) block edges along x, metres; ``ys``: (2R+2,) along y.
         cell_size, thickness: metres.
+        edges: ``xs`` then ``ys``.
     """
 
     solid: np.ndarray
@@ -50,6 +51,10 @@ class MazeGrids:
     ys: np.ndarray
     cell_size: float
     thickness: float
+    edges: np.ndarray = field(init=False, repr=False)
+
+    def __post_init__(self):
+        self.edges = np.concatenate([self.xs, self.ys])
 
     @classmethod
     def like(cls, maze: Maze, count: int) -> MazeGrids:
@@ -99,68 +104,50 @@ class MazeGrids:
         meaningless where the distance is inf.
 
         A ray enters a solid block only where it enters a wall band (cell interiors are free), so
-        only its crossings into the bands ``k s -+ t/2`` are looked at, a few per axis at a time
-        (``lookahead``) for all rays at once (see ``_BandCrossings``); with many rays, those that
-        leave their sensor's cell through a wall are settled first (``_BandCrossings.own_cell``).
+        only its crossings into the bands ``k s -+ t/2`` are looked at. First, from the sensors'
+        cells alone, the rays that leave their cell through a wall (about half); then the others'
+        crossings, ``LOOKAHEAD`` per axis at a time (``_BandCrossings``). Which face a ray meets is
+        decided in float32 (each ray alike, whatever else is cast with it); its distance is then
+        measured exactly to that face, in float64.
         """
         count, beams = len(envs), len(bearings)
-        origin = np.stack([x, y])[:, :, None]  # (2, K, 1), m
-        direction = _directions(heading, bearings)  # (2, K, N)
-        crossings = _BandCrossings(self, origin, direction, envs)
-        distances = np.full(count * beams, np.inf)
-        across_x = np.zeros(count * beams, dtype=bool)
-        active = np.arange(count * beams)
-        if self._lookahead(len(active), max_range) < self._crossings_in_range(max_range):
-            hit, hit_x, done = crossings.own_cell(self, envs, origin)  # many rays: the easy ones first
-            limit, lookahead = hit, 0  # nothing looked at yet
-        else:  # few: all at once
-            lookahead = self._crossings_in_range(max_range)
-            hit, hit_x, done, limit = crossings.look(lookahead, max_range)
-        while True:
-            settled = active[done]
-            distances[settled], across_x[settled] = hit[done], hit_x[done]
-            if done.all():
-                break
-            active = active[~done]
-            crossings.advance(~done, limit, lookahead)
-            lookahead = self._lookahead(len(active), max_range)
-            hit, hit_x, done, limit = crossings.look(lookahead, max_range)
-        distances[distances > max_range * (1 + FLOAT32_SLACK)] = np.inf  # none in range
-        shape = (count, beams)
-        faces, along, distances = self._faces(origin, direction, distances.reshape(shape), across_x.reshape(shape))
-        distances[distances > max_range] = np.inf
-        return distances, faces, along
+        direction = _directions(heading, bearings).reshape(2, -1)  # (2, R) float64, R = K N
+        sensors = _Sensors(self, envs, x, y)
+        up = direction > 0
+        inverse = np.abs(direction.astype(np.float32))
+        np.divide(1, inverse, out=inverse)  # (2, R) m along the ray per m along each axis
+        first = np.where(up.reshape(2, count, beams), sensors.ahead[..., 1:], sensors.ahead[..., :1]).reshape(2, -1)
+        first *= inverse  # (2, R) m to the first band crossing along each axis
+        across_x = first[0] <= first[1]
+        # Leaving the own cell: the nearer first crossing, through a wall if the block there is solid.
+        code = np.repeat(np.arange(0, 8 * count, 8, dtype=np.int32), beams)
+        code += across_x.view(np.uint8) << 2 | up[1].view(np.uint8) << 1 | up[0].view(np.uint8)
+        done = sensors.own_done.take(code)
+        edge = sensors.own_edge.take(code)
+        missed = np.zeros(count * beams, dtype=bool)
+        rest = np.flatnonzero(~done)
+        if len(rest):
+            crossings = _BandCrossings(self, sensors, rest, beams, direction, up, inverse, first, across_x)
+            rest_x, rest_edge, rest_missed = crossings.hits(max_range)
+            across_x[rest], edge[rest], missed[rest] = rest_x, rest_edge, rest_missed
+        return self._measure(sensors, direction, across_x, edge, missed, max_range, (count, beams))
 
-    def _lookahead(self, rays: int, max_range: float) -> int:
-        """Band crossings per axis looked at per ray in one pass: all within ``max_range`` when few
-        rays remain (one pass, no bookkeeping), else three (most rays meet a wall within three
-        cells; measured fastest with 64 and 256 robots)."""
-        within_range = self._crossings_in_range(max_range)
-        return within_range if rays * within_range <= LOOK_ALL_BELOW else min(3, within_range)
-
-    def _crossings_in_range(self, max_range: float) -> int:
-        """The most band crossings along one axis within ``max_range`` of any point."""
-        return math.floor(max_range / self.cell_size) + 1
-
-    def _faces(self, origin, direction, distances, across_x):
-        """The faces hit (as ``cast`` returns them) by the rays from ``origin`` (2, K, 1) (m) along
-        ``direction`` (2, K, N) at about ``distances`` (K, N) (m, inf: none), through a vertical
-        face where ``across_x`` (K, N): ``(faces, along, distances)``, all (K, N), the distances
-        now measured exactly to the faces' block edges."""
-        s, half = self.cell_size, self.thickness / 2
-        origin, other = (np.where(across_x, origin[k], origin[1 - k]) for k in (0, 1))
-        normal, sideways = (np.where(across_x, direction[k], direction[1 - k]) for k in (0, 1))
-        missed = np.isinf(distances)
-        # The face of band k is on k s - t/2 (entered moving up) or k s + t/2 (moving down):
-        # block edge 2k or 2k + 1.
-        reached = origin + np.where(missed, 0.0, distances) * normal
-        edge = 2 * np.rint((reached + np.copysign(half, normal)) / s).astype(np.int64) + (normal < 0)
-        edges = np.concatenate([self.xs, self.ys])
-        position = edges[np.clip(np.where(across_x, edge, len(self.xs) + edge), 0, len(edges) - 1)]
-        exact = (position - origin) / normal
-        along = other + exact * sideways
+    def _measure(self, sensors, direction, across_x, edge, missed, max_range, shape):
+        """``cast``'s ``(distances, faces, along)`` of the rays along ``direction`` (2, R) that meet
+        the block edge ``edge`` (R,) (an index into ``xs`` then ``ys``), a vertical one where
+        ``across_x``; none where ``missed``."""
+        across_x, edge, missed = across_x.reshape(shape), edge.reshape(shape), missed.reshape(shape)
+        normal = np.where(across_x, direction[0].reshape(shape), direction[1].reshape(shape))
+        sideways = np.where(across_x, direction[1].reshape(shape), direction[0].reshape(shape))
+        origin_x, origin_y = (np.repeat(part, shape[1]).reshape(shape) for part in sensors.origin)
+        position = self.edges.take(edge, mode="clip")
+        position -= np.where(across_x, origin_x, origin_y)
+        exact = np.divide(position, normal, out=position)
+        along = np.where(across_x, origin_y, origin_x)
+        along += exact * sideways
+        missed |= exact > max_range
         exact[missed] = np.inf
-        return np.where(across_x, edge, -1 - edge), along, exact
+        return exact, np.where(across_x, edge, len(self.xs) - 1 - edge), along
 
     # -- wall faces seen --------------------------------------------------------------------
     def bin_counts(self, spacing: float) -> tuple[int, int]:
@@ -252,106 +239,168 @@ def push_out(position: np.ndarray, radius: float, boxes: np.ndarray, iterations:
     return touched
 
 
-class _BandCrossings:
-    """The rays of one ``MazeGrids.cast`` still flying, and their next crossings into wall bands.
+class _Sensors:
+    """Per sensor of one ``MazeGrids.cast``: where it stands and what its rays first meet.
 
-    Along each axis a ray enters the wall band of grid line k (``k s -+ t/2``) at
-    ``t = first + n * spacing`` (m along the ray), n = 0, 1, ... from its next band on; there it
-    enters the block of band 2k along that axis and, across it, of the band the other coordinate
-    lies in. The first solid block entered on either axis is the hit, certain once no crossing not
-    yet looked at lies nearer. The distances here are float32 (to about 1e-7 m), enough to tell
-    which face a ray meets (``MazeGrids.cast`` then measures the distance to it exactly).
-
-    Per axis a (0: x, 1: y) and ray, ``floats[:, a]`` (4, 2, R) float32 holds ``first``,
-    ``spacing`` (m), ``offset`` and ``rate``; ``ints[:, a]`` (2, 2, R) int32 ``start`` and
-    ``stride``: the flat index (into ``solid``) of crossing n's block is ``start + n * stride +
-    across * band``, ``across`` the flat stride of the other axis (2C+1 or 1) and ``band =
-    floor(u) + floor(u - t/s)`` (+ 1 in ``start``) for ``u = offset + t * rate``, the other
-    coordinate at the crossing in cells, shifted by t/2. A crossing past the maze's outer wall
-    may index any block: it lies beyond a solid crossing of the same ray (the outer wall is
-    closed), and ``look`` never takes it for the hit.
+    Attributes:
+        origin: (2, K) x, y (m).
+        ahead: (2, K, 2) float32, per axis and sense (down, up): metres along that axis to the
+            first wall band entered (that of line ``line``: its near face at ``line s -+ t/2``).
+        line: (2, K, 2) that line's index.
+        own_done, own_edge: (K * 8,) per sensor and ray code ``4 across_x + 2 up_y + up_x``: whether
+            a ray leaving the sensor's cell first across x (else y), moving up or down each axis,
+            meets a wall there (only for a sensor inside a cell, not in a wall band), and the block
+            edge of that face (an index into ``MazeGrids.edges``).
     """
 
-    def __init__(self, grids: MazeGrids, origin: np.ndarray, direction: np.ndarray, envs: np.ndarray):
-        """Rays from ``origin`` (2, K, 1) (m) in maze ``envs[k]`` along ``direction`` (2, K, N)."""
+    def __init__(self, grids: MazeGrids, envs: np.ndarray, x: np.ndarray, y: np.ndarray):
+        s, half = grids.cell_size, grids.thickness / 2
+        height, width = grids.solid.shape[1:]
+        self.origin = np.stack([x, y])
+        q = _SENSE * self.origin[..., None] + half  # (2, K, 2): the coordinate along each sense, + t/2
+        lines = np.floor(q / s) + 1
+        self.ahead = (lines * s - q).astype(np.float32)
+        self.line = (_SENSE * lines).astype(np.int64)
+        i, j = grids.blocks_of(x, y)
+        inside = (i & j & 1).astype(bool)  # (K,) in a cell's interior, not in a wall band
+        # The blocks beside the cell: left, right, below, above (clipped for sensors not inside).
+        block = envs * (height * width) + i * width + j
+        beside = grids.solid.take(block[:, None] + [-1, 1, -width, width], mode="clip") & inside[:, None]
+        self.own_done = beside[:, [2, 2, 3, 3, 0, 1, 0, 1]].ravel()
+        self.own_edge = np.where(_X_CODES, j[:, None], i[:, None] + len(grids.xs)) + _UP_CODES
+        self.own_edge = self.own_edge.astype(np.int32).ravel()
+        self.inside, self.envs = inside, envs
+
+
+#: The two senses along an axis: down, up.
+_SENSE = np.array([-1, 1])
+#: Per own-cell ray code ``4 across_x + 2 up_y + up_x`` (``_Sensors``): whether across x, and
+#: whether moving up along the axis crossed.
+_X_CODES = np.array([False] * 4 + [True] * 4)
+_UP_CODES = np.array([0, 0, 1, 1, 0, 1, 0, 1])
+
+
+class _BandCrossings:
+    """The rays of one ``MazeGrids.cast`` not settled in their sensor's cell, and their crossings
+    into wall bands.
+
+    Along each axis a ray enters the wall band of grid line k (``k s -+ t/2``) at
+    ``t = first + n * spacing`` (m along the ray), n = 0, 1, ... from its first band on; there it
+    enters the block of band 2k along that axis and, across it, of the band the other coordinate
+    lies in. The first solid block entered on either axis is the hit (x first on a tie), certain once
+    no crossing not yet looked at lies nearer. The distances here are float32 (to about 1e-7 m),
+    enough to tell which face a ray meets (``MazeGrids.cast`` then measures the distance to it
+    exactly); every ray's are computed alike (from n, never from an earlier pass), so a ray's hit
+    does not depend on the others cast with it.
+
+    Per axis a (0: x, 1: y) and ray, ``floats[:, a]`` (4, 2, M) float32 holds ``first``,
+    ``spacing`` (m), ``offset`` and ``rate``; ``ints[:, a]`` (3, 2, M) int32 ``start``,
+    ``stride`` and ``n0``: the flat index (into ``solid``) of crossing n's block is ``start + n *
+    stride + across * band``, ``across`` the flat stride of the other axis (2C+1 or 1) and ``band =
+    floor(u) + floor(u - t/s)`` (+ 1 in ``start``) for ``u = offset + t * rate``, the other
+    coordinate at the crossing in cells, shifted by t/2; n0 the first crossing not known free. A
+    crossing past the maze's outer wall may index any block: it lies beyond a solid crossing of
+    the same ray (the outer wall is closed), and is never taken for the hit.
+    """
+
+    def __init__(self, grids, sensors, rays, beams, direction, up, inverse, first, across_x):
+        """The rays ``rays`` (M,) (indices into the cast's R = K N rays, ``beams`` per sensor), with
+        the cast's (2, R) ``direction``, ``up`` (whether moving up each axis), ``inverse`` (1 /
+        |direction|, float32), ``first`` (first crossings, m, float32) and (R,) ``across_x``
+        (whether the first crossing along x is the nearer)."""
         s, half = grids.cell_size, grids.thickness / 2
         height, width = grids.solid.shape[1:]
         self.solid = grids.solid.ravel()
         self.thin = np.float32(grids.thickness / s)  # share of a cell's width a wall band takes
         self.across = np.array([width, 1], dtype=np.int32)[:, None, None]
-        up = direction > 0
-        inverse = 1 / np.abs(direction)
-        # Per sensor, axis and sense (last axis: down, up): q the origin's coordinate + t/2 along
-        # the sense, and the first band entered that of line index ``sense * lines`` (its near face
-        # at lines * s - t/2, ``ahead`` = lines * s - q metres on along that axis).
-        sense = np.array([-1, 1])
-        q = sense * origin + half  # (2, K, 2)
-        lines = np.floor(q / s) + 1
-        ahead = lines * s - q
-        unit = np.array([1, width])[:, None, None]  # flat stride of a block along x, along y
-        stride = 2 * unit * sense  # (2, 1, 2)
-        start = (envs * (height * width))[:, None] + self.across[:, 0][:, :, None] + stride * lines
-        rays = direction.shape[1] * direction.shape[2]
-        self.floats = np.empty((4, 2, rays), dtype=np.float32)
-        floats = self.floats.reshape(4, *direction.shape)
-        np.multiply(np.where(up, ahead[..., 1:], ahead[..., :1]), inverse, out=floats[0])  # first
-        np.multiply(s, inverse, out=floats[1])  # spacing
-        floats[2] = (origin[::-1] + half) / s  # offset
-        np.multiply(direction[::-1], 1 / s, out=floats[3])  # rate
-        self.ints = np.empty((2, 2, rays), dtype=np.int32)
-        ints = self.ints.reshape(2, *direction.shape)
-        ints[0] = np.where(up, start[..., 1:], start[..., :1])  # band 2k (+ band 1 across) of line k
-        ints[1] = np.where(up, stride[..., 1:], stride[..., :1])
+        sensor = rays // beams
+        up = np.take(up, rays, axis=1)
+        count = len(sensors.envs)
+        key = up + 2 * sensor  # (2, M): per axis, the sensor's sense entry
+        key[1] += 2 * count
+        self.first = np.take(first, rays, axis=1)
+        self.spacing = np.take(inverse, rays, axis=1)
+        self.spacing *= np.float32(s)
+        rate = np.take(direction, rays, axis=1)[::-1].astype(np.float32)
+        rate *= np.float32(1 / s)
+        offset = ((sensors.origin[::-1] + half) / s).astype(np.float32).take(sensor, axis=1)
+        unit = np.array([[1], [width]], dtype=np.int32)  # flat stride of a block along x, along y
+        start = sensors.envs[:, None] * (height * width) + 2 * sensors.line * unit[:, :, None]
+        start += np.array([width, 1])[:, None, None]  # band + 1 across
+        # Crossing 0 on the axis a ray left its cell across is free (the cell's open side).
+        inside = sensors.inside[sensor]
+        across = across_x[rays]
+        n0 = np.stack([inside & across, inside & ~across]).astype(np.int32)
+        self.steps = (4 * up - 2).astype(np.int32)  # block edges a crossing: 2, down or up
+        self.stride = self.steps * unit  # flat index steps a crossing
+        edges = 2 * sensors.line + (_SENSE < 0)  # block edge of the first band's near face
+        edges[1] += len(grids.xs)
+        self.edge0 = edges.ravel().take(key)  # (2, M)
+        self.rate = rate
+        # Per pass: crossing n0 + l (l < LOOKAHEAD) of each axis at t0 + l spacing (m), with the
+        # other coordinate u0 + l du (cells) and block index base + l stride + across band.
+        self.n0 = n0
+        self.t0 = n0.astype(np.float32) * self.spacing
+        self.t0 += self.first
+        self.u0 = self.t0 * rate
+        self.u0 += offset
+        self.base = start.ravel().take(key).astype(np.int32)
+        self.base += n0 * self.stride
 
-    def look(self, lookahead: int, max_range: float) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-        """Look at the next ``lookahead`` band crossings per axis of every ray; return (R,) arrays:
-        the nearest solid one (m, inf if none), whether it is an x crossing (vertical face),
-        whether the ray is done (that hit is certain, or nothing within ``max_range`` is left),
-        and the nearest crossing not looked at (m)."""
-        first, spacing, offset, rate = (part[:, None] for part in self.floats)  # (2, 1, R)
-        start, stride = (part[:, None] for part in self.ints)
-        n = np.arange(lookahead, dtype=np.float32)[:, None]  # (L, 1)
-        t = first + n * spacing  # (2, L, R), m
-        u = offset + t * rate
-        band = (np.floor(u) + np.floor(u - self.thin)).astype(np.int32)
-        index = start + n.astype(np.int32) * stride + self.across * band
-        np.clip(index, 0, len(self.solid) - 1, out=index)
-        hits = np.where(self.solid[index], t, np.float32(np.inf)).min(axis=1)  # (2, R)
-        hit = hits.min(axis=0)
-        limit = (t[:, -1] + spacing[:, 0]).min(axis=0)  # the nearest crossing not looked at
-        return hit, hits[0] <= hits[1], (hit <= limit) | (limit > max_range), limit
-
-    def own_cell(self, grids: MazeGrids, envs: np.ndarray, origin: np.ndarray):
-        """The rays that leave their sensor's cell through one of its walls, where the sensor stands
-        inside a cell (not in an open wall's gap): there the nearer first crossing is the hit, in
-        the block beside the cell on that side. Returns (R,) arrays as ``look``: the hit (m), whether
-        through a vertical face, whether done (these rays)."""
-        i, j = grids.blocks_of(origin[0, :, 0], origin[1, :, 0])  # (K,) the sensors' blocks
-        inside = (i % 2 == 1) & (j % 2 == 1)  # a cell's interior, not a wall band
-        solid = grids.solid
-        # (K, 4): is the block beside the cell solid: left, right, below, above.
-        beside = np.column_stack(
-            [solid[envs, i, j - 1], solid[envs, i, np.minimum(j + 1, solid.shape[2] - 1)]]
-            + [solid[envs, i - 1, j], solid[envs, np.minimum(i + 1, solid.shape[1] - 1), j]]
+    def hits(self, max_range: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(M,) arrays: whether each ray's hit is on a vertical face, the block edge of the face
+        (an index into ``MazeGrids.edges``), whether it has none within ``max_range``."""
+        count = self.first.shape[-1]
+        best = np.full((2, count), np.inf, dtype=np.float32)  # nearest solid crossing per axis
+        lanes = np.arange(LOOKAHEAD, dtype=np.float32)[:, None]
+        int_lanes = np.arange(LOOKAHEAD, dtype=np.int32)[:, None]
+        active = np.arange(count)
+        t0, u0, base, spacing, du, stride = (
+            self.t0,
+            self.u0,
+            self.base,
+            self.spacing,
+            self.spacing * self.rate,
+            self.stride,
         )
-        first, up = self.floats[0], self.ints[1] > 0  # (2, R): distances, whether moving up x, up y
-        across_x = first[0] <= first[1]
-        side = np.where(across_x, up[0], 2 + up[1]).reshape(len(envs), -1)  # (K, N)
-        done = np.take_along_axis(beside, side, axis=1) & inside[:, None]
-        return np.minimum(first[0], first[1]), across_x, done.ravel()
-
-    def advance(self, keep: np.ndarray, limit: np.ndarray, lookahead: int) -> None:
-        """Keep the rays where ``keep`` (R,) holds, moved past their crossings nearer than ``limit``
-        (m) (``look``ed at with ``lookahead`` and found free; none when 0)."""
-        # (np.compress keeps the arrays C-contiguous, unlike a[..., keep].)
-        self.floats, self.ints = np.compress(keep, self.floats, axis=-1), np.compress(keep, self.ints, axis=-1)
-        if not lookahead:
-            return
-        first, spacing = self.floats[:2]
-        passed = np.floor((limit[keep] - first) / spacing) + 1
-        passed = np.minimum(np.maximum(passed, 0), lookahead).astype(np.int32)
-        first += passed * spacing
-        self.ints[0] += passed * self.ints[1]
+        while True:
+            t = lanes * spacing[:, None]
+            t += t0[:, None]  # (2, L, M') m
+            u = lanes * du[:, None]
+            u += u0[:, None]
+            band = np.floor(u)
+            u -= self.thin
+            band += np.floor(u, out=u)
+            with np.errstate(invalid="ignore"):  # rays along an axis: far crossings, any block
+                index = band.astype(np.int32)
+            index *= self.across
+            index += int_lanes * stride[:, None]
+            index += base[:, None]
+            found = np.where(self.solid.take(index, mode="clip"), t, np.float32(np.inf)).min(axis=1)  # (2, M')
+            if len(active) < count:
+                np.minimum(best[:, active], found, out=found)
+                best[:, active] = found
+            else:
+                best = found
+            limit = (t[:, -1] + spacing).min(axis=0)  # nearest crossing not looked at
+            done = (found.min(axis=0) < limit) | (limit > max_range)
+            if done.all():
+                break
+            keep = ~done
+            active = active[keep]
+            t0, u0, base, spacing, du, stride = (
+                np.compress(keep, part, axis=-1) for part in (t0, u0, base, spacing, du, stride)
+            )
+            t0 += LOOKAHEAD * spacing
+            u0 += LOOKAHEAD * du
+            base += LOOKAHEAD * stride
+        across_x = best[0] <= best[1]
+        with np.errstate(invalid="ignore"):  # none found: inf
+            edge = np.rint((best - self.first) / self.spacing).astype(np.int32)  # the crossings found
+        edge *= self.steps
+        edge += self.edge0
+        missed = ~(np.minimum(best[0], best[1]) <= max_range * (1 + FLOAT32_SLACK))
+        return across_x, np.where(across_x, edge[0], edge[1]), missed
 
 
 def _directions(heading: np.ndarray, bearings: np.ndarray) -> np.ndarray:
@@ -359,7 +408,11 @@ def _directions(heading: np.ndarray, bearings: np.ndarray) -> np.ndarray:
     ``heading`` (K,) (rad); components under ``TINY_COMPONENT`` raised to it."""
     cos_h, sin_h = np.cos(heading)[:, None], np.sin(heading)[:, None]
     cos_b, sin_b = np.cos(bearings), np.sin(bearings)
-    direction = np.stack([cos_h * cos_b - sin_h * sin_b, sin_h * cos_b + cos_h * sin_b])
+    direction = np.empty((2, len(heading), len(bearings)))
+    np.multiply(cos_h, cos_b, out=direction[0])
+    direction[0] -= sin_h * sin_b
+    np.multiply(sin_h, cos_b, out=direction[1])
+    direction[1] += cos_h * sin_b
     direction[np.abs(direction) < TINY_COMPONENT] = TINY_COMPONENT
     return direction
 

@@ -141,7 +141,7 @@ class MazeVectorEnv(VectorEnv):
             + self.cell_reward * new_cell
             - self.collision_penalty * self._collision
         ) * moving
-        terminated = self.visited.all(axis=(1, 2)) & moving
+        terminated = (self.visited_counts == self.visited[0].size) & moving
         truncated = (self.steps >= self.max_steps) & moving
         self._autoreset = terminated | truncated
         return self._observation(odometry), rewards, terminated, truncated, self._infos(everyone)
@@ -167,9 +167,11 @@ class MazeVectorEnv(VectorEnv):
             grids.set(env, self.mazes[env])
             self.wall_bins[env] = grids.wall_bins(env, WALL_SAMPLE_SPACING)
             self.seen[env] = False
+            self._unseen[env] = self.wall_bins[env]
             self.visited[env] = False
         self.wall_counts[envs] = self.wall_bins[envs].sum(axis=1)
         self.seen_counts[envs] = 0
+        self.visited_counts[envs] = 0
         self.poses[envs] = self.start_poses[envs]
         self._mark_visited(envs)
         for array in (self.steps, self.time, self._commanded, self._reported, self._collision, self._autoreset):
@@ -194,9 +196,11 @@ class MazeVectorEnv(VectorEnv):
         bins = self.grids.bin_total(WALL_SAMPLE_SPACING)
         self.wall_bins = np.zeros((self.num_envs, bins), dtype=bool)  # bins on a wall face
         self.seen = np.zeros((self.num_envs, bins), dtype=bool)  # wall bins a beam landed in
+        self._unseen = np.zeros((self.num_envs, bins), dtype=bool)  # wall bins no beam landed in yet
         self.wall_counts = np.zeros(self.num_envs, dtype=np.int64)
         self.seen_counts = np.zeros(self.num_envs, dtype=np.int64)
         self.visited = np.zeros((self.num_envs, maze.rows, maze.cols), dtype=bool)
+        self.visited_counts = np.zeros(self.num_envs, dtype=np.int64)  # cells visited
 
     def _draw(self, envs: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """The listed envs' random draws for one step (float32), from each env's own generator: standard
@@ -255,14 +259,30 @@ class MazeVectorEnv(VectorEnv):
         middle = headings[:, :-1] + 0.5 * turn
         forward = 0.5 * (travel[..., 0] + travel[..., 1])
         step_x, step_y = forward * np.cos(middle), forward * np.sin(middle)  # (E, steps) m
-        position = self.poses[:, :2].T.copy()  # (2, E) m
+        start = self.poses[:, :2].T  # (2, E) m
         reach = robot.body_radius + 2 * robot.max_wheel_speed * dt * steps  # with room for slip
-        boxes = self._grids().boxes_near(position[0], position[1], reach)
+        boxes = self._grids().boxes_near(start[0], start[1], reach)
+        # Every physics step's position without walls, (2, E, steps + 1), the same sums as the
+        # step-by-step loop below; a robot that overlaps no box at any of them never touches a wall.
+        path = np.empty((2, self.num_envs, steps + 1))
+        path[:, :, 0] = start
+        path[0, :, 1:], path[1, :, 1:] = step_x, step_y
+        np.cumsum(path, axis=2, out=path)
+        point = path[:, :, 1:, None]  # (2, E, steps, 1)
+        gap = point - np.minimum(np.maximum(point, boxes[:2, :, None]), boxes[2:, :, None])
+        squared = gap[0] * gap[0] + gap[1] * gap[1]  # (E, steps, B)
+        overlaps = squared.min(axis=2) < robot.body_radius * robot.body_radius  # (E, steps)
+        touching = np.flatnonzero(overlaps.any(axis=1))
+        position = path[:, :, -1].copy()
         touched = np.zeros(self.num_envs, dtype=bool)
-        for step in range(steps):
-            position[0] += step_x[:, step]
-            position[1] += step_y[:, step]
-            touched |= push_out(position, robot.body_radius, boxes)
+        if len(touching):  # step by step from the first overlap on, pushed out of the walls
+            first = int(overlaps[touching].argmax(axis=1).min())
+            near, moved = boxes[:, touching], path[:, touching, first].copy()
+            for step in range(first, steps):
+                moved[0] += step_x[touching, step]
+                moved[1] += step_y[touching, step]
+                touched[touching] |= push_out(moved, robot.body_radius, near)
+            position[:, touching] = moved
         self.poses = np.column_stack([position.T, wrap_angle(headings[:, -1])])
         return touched
 
@@ -296,8 +316,9 @@ class MazeVectorEnv(VectorEnv):
             valid &= uniforms >= laser.dropout
         self.last_scan[envs] = np.where(valid, noisy, 0.0)
         bins = (envs[:, None] * self.seen.shape[1] + grids.face_bins(faces, along, WALL_SAMPLE_SPACING))[hit]
-        new = np.unique(bins[self.wall_bins.ravel()[bins] & ~self.seen.ravel()[bins]])
+        new = np.unique(bins[self._unseen.ravel()[bins]])
         self.seen.ravel()[new] = True
+        self._unseen.ravel()[new] = False
         newly_seen = np.bincount(new // self.seen.shape[1], minlength=self.num_envs)
         self.seen_counts += newly_seen
         return newly_seen, self._mark_visited(envs)
@@ -305,12 +326,12 @@ class MazeVectorEnv(VectorEnv):
     def _mark_visited(self, envs: np.ndarray) -> np.ndarray:
         """Mark the cells the listed envs' robots stand in; return (E,) whether each was new."""
         rows, cols = self.visited.shape[1:]
-        size = self._grids().cell_size
-        row = np.clip((self.poses[envs, 1] // size).astype(np.int64), 0, rows - 1)
-        col = np.clip((self.poses[envs, 0] // size).astype(np.int64), 0, cols - 1)
+        cells = (self.poses[envs, :2] // self._grids().cell_size).astype(np.int64)
+        cell = envs * (rows * cols) + np.clip(cells[:, 1], 0, rows - 1) * cols + np.clip(cells[:, 0], 0, cols - 1)
         new = np.zeros(self.num_envs, dtype=bool)
-        new[envs] = ~self.visited[envs, row, col]
-        self.visited[envs, row, col] = True
+        new[envs] = ~self.visited.ravel()[cell]
+        self.visited.ravel()[cell] = True
+        self.visited_counts += new
         return new
 
     def _observation(self, odometry: np.ndarray) -> dict:
@@ -323,7 +344,7 @@ class MazeVectorEnv(VectorEnv):
         values = {
             "pose": self.poses.copy(),
             "coverage": self.seen_counts / self.wall_counts,
-            "visited": self.visited.mean(axis=(1, 2)),
+            "visited": self.visited_counts / self.visited[0].size,
             "collision": self._collision.copy(),
             "time": self.time.copy(),
         }
