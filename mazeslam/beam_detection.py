@@ -78,12 +78,13 @@ def detect_beam_convention(
     coarse_degrees: float = 5.0,
     refined: int = 2,
     max_points: int = 100,
+    directions: tuple[int, ...] = (1, -1),
 ) -> Detection:
     """Score first-beam angles over the full circle, both directions: every ``coarse_degrees``,
     then every ``step_degrees`` within one coarse step of the ``refined`` best coarse angles of
     each direction (the score changes smoothly with the angle: the shift ``R(-phi0) t`` turns).
     Of each pair's second scan at most ``max_points`` evenly spaced points are matched (the
-    median distance needs no more)."""
+    median distance needs no more). ``directions``: the beam directions to try (one when known)."""
     if course_log.n_beams is None:
         raise ValueError(f"{course_log.source}: no scans to detect a beam convention from")
     # Full-circle scans (the course logs); a front fan's angles are known from its format.
@@ -93,7 +94,7 @@ def detect_beam_convention(
         raise ValueError(f"{course_log.source}: the robot never moves between two scans; nothing to detect from")
     coarse = np.radians(np.arange(0.0, 360.0, coarse_degrees))
     candidates = []
-    for direction in (1, -1):
+    for direction in directions:
         bearings = BeamGeometry(first_beam_angle=0.0, direction=direction).bearings(n)  # q: phi0 = 0
         matched = [
             _matched_pair(course_log, a, b, motion, bearings, min_range, max_range, max_points)
@@ -233,6 +234,8 @@ def describe(detection: Detection) -> list[str]:
 
 #: The file in a command's output folder that keeps the beam convention detected for its log.
 CACHE_NAME = "beam_convention.json"
+#: Changes with the detection's method, so that a cache of an older method is not read.
+DETECTION_VERSION = 2
 #: A detected first-beam angle within this many degrees of a quarter turn is taken as that turn:
 #: loggers put beam 0 forward, behind or sideways, and the detection's grid and noise are ~1 deg.
 SNAP_DEGREES = 3.0
@@ -248,14 +251,16 @@ def convention_given(sensor: SensorOverrides) -> bool:
 def with_detected_convention(run: LoadedRun, config: SlamConfig, cache_folder: Path | None = None) -> LoadedRun:
     """``run`` with its beam convention detected from its scans (``detected_geometry`` with
     ``config``'s corner ranges and jump tolerance, cached as ``CACHE_NAME`` in ``cache_folder``) when
-    nothing says it: a full-circle log with no sidecar and no convention in ``config.sensor``.
-    Otherwise ``run`` as it is."""
+    nothing says it: a full-circle log with no sidecar and no first-beam angle in ``config.sensor``
+    (a direction given alone is kept, and only the angle detected). Otherwise ``run`` as it is."""
     full_circle = run.geometry.is_full_circle and run.log.n_beams is not None and run.log.is_scan.sum() > 1
-    if not full_circle or run.geometry_from_sidecar or convention_given(config.sensor):
+    if not full_circle or run.geometry_from_sidecar or config.sensor.first_beam_angle is not None:
         return run
     cache = Path(cache_folder) / CACHE_NAME if cache_folder is not None else None
     corners, jump_tolerance = config.corners, config.odometry.jump_tolerance
-    geometry, origin = detected_geometry(run, corners.min_range, corners.max_range, jump_tolerance, cache)
+    geometry, origin = detected_geometry(
+        run, corners.min_range, corners.max_range, jump_tolerance, cache, direction=config.sensor.direction
+    )
     return dataclasses.replace(run, geometry=geometry, geometry_origin=origin)
 
 
@@ -265,12 +270,14 @@ def detected_geometry(
     max_range: float = math.inf,
     jump_tolerance: float = math.inf,
     cache: Path | None = None,
+    direction: int | None = None,
 ) -> tuple[BeamGeometry, str]:
     """``run``'s beam geometry with the convention detected from its scans, and a line saying so.
 
     The mounting offset stays ``run``'s. An inconclusive detection (margin under
     ``CONCLUSIVE_MARGIN``, or a robot that never moves) keeps ``run``'s geometry. ``cache``: a JSON
-    file that keeps the detection for this log's bytes and these settings, so that a rerun skips it."""
+    file that keeps the detection for this log's bytes and these settings, so that a rerun skips it.
+    ``direction``: the beam direction when known (only the first-beam angle is then detected)."""
     settings = {
         name: value if math.isfinite(value) else None
         for name, value in (
@@ -280,16 +287,22 @@ def detected_geometry(
             ("jump_tolerance", jump_tolerance),
         )
     }
-    key = {"log_sha1": hashlib.sha1(run.path.read_bytes()).hexdigest(), "settings": settings}
+    settings["direction"] = direction
+    key = {"version": DETECTION_VERSION, "log_sha1": hashlib.sha1(run.path.read_bytes()).hexdigest()}
+    key["settings"] = settings
     found = _read_cache(cache, key)
     if found is None:
+        directions = (direction,) if direction is not None else (1, -1)
         try:
-            detection = detect_beam_convention(run.log, run.geometry.mount_x, min_range, max_range, jump_tolerance)
+            detection = detect_beam_convention(
+                run.log, run.geometry.mount_x, min_range, max_range, jump_tolerance, directions=directions
+            )
             found = {"first_beam_angle": _snapped(detection.best.first_beam_angle), "margin": detection.margin}
             found["direction"] = detection.best.direction
         except ValueError as error:
             found = {"error": str(error)}
         if cache is not None:
+            cache.parent.mkdir(parents=True, exist_ok=True)
             cache.write_text(json.dumps({**key, **found}, indent=1) + "\n")
     if "error" in found or found["margin"] < CONCLUSIVE_MARGIN:
         reason = found.get("error") or f"margin x{found['margin']:.2f} under x{CONCLUSIVE_MARGIN}"

@@ -66,7 +66,7 @@ def run_grid_command(run: LoadedRun, config: SlamConfig, out_dir: Path, progress
         + (f" ({duration / max(seconds, 1e-9):.1f}x real time)" if duration > 0 else "")
         + f", peak map memory {result.peak_map_bytes / 2**20:.0f} MB (tiles shared between particles)",
     ]
-    glitches = run.glitch_line(config.odometry.jump_tolerance)
+    glitches = run.glitch_line(config.odometry.jump_tolerance, pairs_summed=True)
     if glitches:
         lines.append(glitches)
     document = {

@@ -76,38 +76,53 @@ class LoadedRun:
         distance = np.abs(self.log.increments[:, 0])
         return np.flatnonzero(self.log.is_odometry & (distance > jump_tolerance))
 
-    def glitch_line(self, jump_tolerance: float) -> str | None:
-        """A line listing the glitches (``glitches``) by log line, time and motion; None without any."""
+    def glitch_pairs(self, jump_tolerance: float) -> list[tuple[int, int]]:
+        """The glitches (``glitches``) that come in pairs: two consecutive odometry records whose
+        summed motion is within ``jump_tolerance``, as record indices (first, second). The course
+        robot's wheel counters wrap and unwrap one record later, so such a pair's sum is the real
+        motion (log1's lines 79-80 and 196-197), while a lone jump is not motion."""
+        glitches = set(self.glitches(jump_tolerance).tolist())
+        odometry = np.flatnonzero(self.log.is_odometry)
+        pairs: list[tuple[int, int]] = []
+        for first, second in zip(odometry[:-1].tolist(), odometry[1:].tolist()):
+            paired = pairs and pairs[-1][1] == first
+            summed = self.log.values[first, 0] + self.log.values[second, 0]
+            if first in glitches and second in glitches and not paired and abs(summed) <= jump_tolerance:
+                pairs.append((first, second))
+        return pairs
+
+    def glitch_line(self, jump_tolerance: float, pairs_summed: bool = False) -> str | None:
+        """A line listing the glitches (``glitches``) by log line, time and motion, and what the
+        filter does with them: all left out, or (``pairs_summed``) each pair's sum kept and the lone
+        ones left out; None without any."""
         glitches = self.glitches(jump_tolerance)
         if not len(glitches):
             return None
         lines = self.log.line_numbers if self.log.line_numbers is not None else glitches + 1
-        return (
-            f"left out {len(glitches)} odometry records travelling more than {jump_tolerance:g} m in one step "
-            "(glitches): "
-            + ", ".join(
-                f"line {lines[index]} (t {self.log.times[index]:.3f} s, dX {self.log.increments[index, 0]:+.4f} m, "
-                f"dTheta {self.log.increments[index, 1]:+.4f} rad)"
-                for index in glitches
-            )
-        )
+        described = {
+            index: f"line {lines[index]} (t {self.log.times[index]:.3f} s, dX {self.log.increments[index, 0]:+.4f} m, "
+            f"dTheta {self.log.increments[index, 1]:+.4f} rad)"
+            for index in glitches
+        }
+        head = f"odometry records travelling more than {jump_tolerance:g} m in one step (glitches)"
+        if not pairs_summed:
+            return f"left out {len(glitches)} {head}: " + ", ".join(described.values())
+        pairs = self.glitch_pairs(jump_tolerance)
+        lone = sorted(set(glitches.tolist()) - {index for pair in pairs for index in pair})
+        parts = [f"{described[a]} + {described[b]} summed (a pair: its sum is the motion)" for a, b in pairs]
+        parts += [f"{described[index]} left out" for index in lone]
+        return f"{len(glitches)} {head}: " + "; ".join(parts)
 
     def log_with_glitch_pairs_summed(self, jump_tolerance: float) -> CourseLog:
-        """The log with each glitch zeroed, except that two glitches in consecutive odometry
-        records whose sum travels within ``jump_tolerance`` become their sum (on the second): the
-        course robot's wheel counters wrap and unwrap one record later, so such a pair's sum is the
-        real motion (log1's lines 79-80 and 196-197), while a lone jump is not motion."""
+        """The log with each glitch pair (``glitch_pairs``) replaced by its sum on its second
+        record and every other glitch set to no motion."""
         values = self.log.values.copy()
-        glitches = set(self.glitches(jump_tolerance).tolist())
-        odometry = np.flatnonzero(self.log.is_odometry)
-        paired: set[int] = set()
-        for first, second in zip(odometry[:-1], odometry[1:]):
-            if first in glitches and second in glitches and first not in paired:
-                summed = values[first, :2] + values[second, :2]
-                if abs(summed[0]) <= jump_tolerance:
-                    values[second, :2], values[first, :2] = summed, 0.0
-                    paired.update((first, second))
-        values[sorted(glitches - paired), :2] = 0.0
+        pairs = self.glitch_pairs(jump_tolerance)
+        for first, second in pairs:
+            values[second, :2] += values[first, :2]
+            values[first, :2] = 0.0
+        paired = {index for pair in pairs for index in pair}
+        values[[index for index in self.glitches(jump_tolerance).tolist() if index not in paired], :2] = 0.0
         return dataclasses.replace(self.log, values=values)
 
     def log_without_glitches(self, jump_tolerance: float) -> CourseLog:

@@ -54,10 +54,14 @@ def run_slam_command(
     )
     run = load_run(log_file, config.sensor)
     run = with_detected_convention(run, config, cache_folder=Path(out_dir))
+    notes = [note for note in [_given_convention_warning(run, config)] if note]
     if config.map.kind == MapKind.GRID:
         from mazeslam.grid_command import run_grid_command
 
-        return run_grid_command(run, config, Path(out_dir), progress)
+        if animate or live:
+            notes.append("--animate and --live draw corner FastSLAM only; the grid filter's map is in occupancy.png")
+        lines = run_grid_command(run, config, Path(out_dir), progress)
+        return lines[:1] + notes + lines[1:]
     updates = int(run.log.is_scan.sum() + run.log.is_landmark.sum())
     every = max(1, updates // ANIMATION_FRAMES) if animate else 0  # frames for the GIF, at most ~ANIMATION_FRAMES
     view = None
@@ -72,7 +76,7 @@ def run_slam_command(
     if view is not None:
         view.close(len(run.log) - 1, result.filter)
     matching_seconds = time.perf_counter() - began - result.step_seconds.sum()
-    lines = _run_lines(run, config, result, matching_seconds)
+    lines = _run_lines(run, config, result, matching_seconds, notes)
     if view is not None:
         lines.append(
             f"Live view: {view.frames} frames drawn in {view.drawing_seconds:.1f} s"
@@ -160,8 +164,10 @@ def run_slam_command(
     return lines
 
 
-def _run_lines(run: LoadedRun, config: SlamConfig, result: SlamResult, matching_seconds: float) -> list[str]:
-    """What the run did: records, particles, resamplings, speed, laser odometry, warnings, glitches."""
+def _run_lines(
+    run: LoadedRun, config: SlamConfig, result: SlamResult, matching_seconds: float, notes: list[str]
+) -> list[str]:
+    """What the run did: records, particles, resamplings, speed, laser odometry, ``notes`` (warnings), glitches."""
     course_log, seconds = run.log, result.step_seconds.sum()
     speed = (
         f" ({course_log.duration / max(seconds, 1e-9):.0f}x real time)"
@@ -182,12 +188,7 @@ def _run_lines(run: LoadedRun, config: SlamConfig, result: SlamResult, matching_
             "intervals without odometry records (matched by correlative search): "
             f"{int((~laser.had_odometry[1:]).sum())}"
         )
-    if convention_given(config.sensor) and not run.geometry_from_sidecar and course_log.is_scan.sum() > 1:
-        warning = convention_warning(
-            course_log, run.geometry, config.corners.min_range, config.corners.max_range, config.odometry.jump_tolerance
-        )
-        if warning:
-            lines.append(warning)
+    lines += notes
     glitches = run.glitch_line(config.odometry.jump_tolerance)
     if glitches:
         lines.append(glitches)
@@ -199,6 +200,17 @@ def _run_lines(run: LoadedRun, config: SlamConfig, result: SlamResult, matching_
         f"{checks['largest_path_step_m']:.3f} m"
     )
     return lines
+
+
+def _given_convention_warning(run: LoadedRun, config: SlamConfig) -> str | None:
+    """A warning when the beam convention the settings give fits the log's scans clearly worse
+    than another (``convention_warning``); None otherwise, or when a sidecar recorded it."""
+    if not convention_given(config.sensor) or run.geometry_from_sidecar or run.log.is_scan.sum() < 2:
+        return None
+    corners = config.corners
+    return convention_warning(
+        run.log, run.geometry, corners.min_range, corners.max_range, config.odometry.jump_tolerance
+    )
 
 
 def _uncertainty_lines(nis: dict, nees: dict | None) -> list[str]:

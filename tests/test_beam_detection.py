@@ -6,11 +6,12 @@ import math
 import pytest
 
 from mazeslam import beam_detection, log, simulate
-from mazeslam.beam_detection import detect_beam_convention, detected_geometry
-from mazeslam.beams import EXERCISE_CONVENTION, BeamGeometry
+from mazeslam.beam_detection import detect_beam_convention, detected_geometry, with_detected_convention
+from mazeslam.beams import EXERCISE_CONVENTION, BeamGeometry, SensorOverrides
 from mazeslam.envs.laser import LaserParams
 from mazeslam.envs.simulator import SimulationConfig
 from mazeslam.loaded_run import load_run
+from mazeslam.slam import SlamConfig
 
 
 def angle_gap_degrees(a, b):
@@ -73,3 +74,26 @@ def test_an_inconclusive_detection_keeps_the_logs_geometry(tmp_path):
     geometry, origin = detected_geometry(run)
     assert geometry == run.geometry
     assert "detection inconclusive" in origin and "never moves" in origin
+
+
+def test_what_the_settings_give_is_kept_and_only_the_rest_detected(tmp_path):
+    laser = LaserParams(geometry=BeamGeometry(first_beam_angle=math.pi / 2, direction=-1))
+    config = dataclasses.replace(SimulationConfig(), laser=laser)
+    simulated = simulate(tmp_path / "run.log", config=config, seed=3, duration=60, progress=False)
+    bare = tmp_path / "bare.log"  # no sidecar
+    bare.write_bytes(simulated.log_path.read_bytes())
+    slam_config = SlamConfig()
+    detected = with_detected_convention(load_run(bare), slam_config)
+    assert (detected.geometry.first_beam_angle, detected.geometry.direction) == (pytest.approx(math.pi / 2), -1)
+    # A first-beam angle given: nothing is detected, the geometry is the settings'.
+    given = SensorOverrides(first_beam_angle=0.0)
+    kept = with_detected_convention(load_run(bare, given), dataclasses.replace(slam_config, sensor=given))
+    assert (kept.geometry.first_beam_angle, kept.geometry.direction) == (0.0, 1)
+    # A direction given alone: kept, and only the angle detected among that direction's.
+    direction_only = SensorOverrides(direction=-1)
+    run = load_run(bare, direction_only)
+    found = with_detected_convention(run, dataclasses.replace(slam_config, sensor=direction_only), tmp_path / "out")
+    assert (found.geometry.first_beam_angle, found.geometry.direction) == (pytest.approx(math.pi / 2), -1)
+    assert (tmp_path / "out" / "beam_convention.json").exists()  # the folder made for the cache
+    # A log with a sidecar: its recorded convention stands.
+    assert with_detected_convention(load_run(simulated.log_path), slam_config).geometry == laser.geometry
