@@ -30,7 +30,7 @@ from mazeslam.envs.walls import block_edges, solid_blocks
 TINY_COMPONENT = 1e-12
 #: Band crossings per axis ``MazeGrids.cast`` looks at per pass, for the rays not settled in their
 #: sensor's cell.
-LOOKAHEAD = 2
+LOOKAHEAD = 6
 #: Relative error allowed to the float32 distances of ``_BandCrossings`` (float32 rounding is 6e-8).
 FLOAT32_SLACK = 1e-6
 
@@ -53,8 +53,11 @@ class MazeGrids:
     thickness: float
     edges: np.ndarray = field(init=False, repr=False)
 
+    code_offsets: np.ndarray = field(init=False, repr=False)
+
     def __post_init__(self):
         self.edges = np.concatenate([self.xs, self.ys])
+        self.code_offsets = _code_offsets(self.solid.shape[2])
 
     @classmethod
     def like(cls, maze: Maze, count: int) -> MazeGrids:
@@ -101,6 +104,27 @@ class MazeGrids:
         none lies within ``max_range``); the wall face hit: ``f >= 0`` the vertical face on
         ``x = xs[f]``, ``f < 0`` the horizontal face on ``y = ys[-1 - f]``; and where along that
         face, metres (y on a vertical face, x on a horizontal one). Faces and ``along`` are
+        meaningless where the distance is inf. See ``cast_edges``.
+        """
+        distances, edges, along = self.cast_edges(envs, x, y, heading, bearings, max_range)
+        return distances, np.where(edges < len(self.xs), edges, len(self.xs) - 1 - edges), along
+
+    def cast_edges(
+        self,
+        envs: np.ndarray,
+        x: np.ndarray,
+        y: np.ndarray,
+        heading: np.ndarray,
+        bearings: np.ndarray,
+        max_range: float,
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Cast beams from K sensors, sensor k at (x[k], y[k]) (m) facing ``heading[k]`` (rad) in maze
+        ``envs[k]``, along ``bearings`` (N,) (rad, sensor frame). Every sensor must stand in free space.
+
+        Returns ``(distances, edges, along)``, all (K, N): metres to the first wall (``inf`` where
+        none lies within ``max_range``); the block edge of the wall face hit, an index into
+        ``edges`` (``xs`` then ``ys``: a vertical face, then a horizontal one); and where along that
+        face, metres (y on a vertical face, x on a horizontal one). Edges and ``along`` are
         meaningless where the distance is inf.
 
         A ray enters a solid block only where it enters a wall band (cell interiors are free), so
@@ -126,6 +150,20 @@ class MazeGrids:
         edge = sensors.own_edge.take(code)
         missed = np.zeros(count * beams, dtype=bool)
         rest = np.flatnonzero(~done)
+        if len(rest):  # through the own cell's open side: the neighbour cell's walls, as above
+            ray_code = code.take(rest)
+            first_rest, inverse_rest = np.take(first, rest, axis=1), np.take(inverse, rest, axis=1)
+            rest_x = across_x.take(rest)
+            near, far = np.minimum(first_rest[0], first_rest[1]), np.maximum(first_rest[0], first_rest[1])
+            inverse_a = np.where(rest_x, inverse_rest[0], inverse_rest[1])
+            post = far < inverse_a * np.float32(self.thickness) + near  # b entered within the gap
+            side = far <= inverse_a * np.float32(self.cell_size) + near  # b entered before the far wall
+            post_solid, side_solid, far_solid = (part.take(ray_code) for part in sensors.next_solid)
+            solid = np.where(side, np.where(post, post_solid, side_solid), far_solid)
+            settled = rest[solid]
+            across_x[settled] = (rest_x ^ side)[solid]
+            edge[settled] = np.where(side, sensors.side_edge.take(ray_code), sensors.far_edge.take(ray_code))[solid]
+            rest = rest[~solid]
         if len(rest):
             crossings = _BandCrossings(self, sensors, rest, beams, direction, up, inverse, first, across_x)
             rest_x, rest_edge, rest_missed = crossings.hits(max_range)
@@ -147,7 +185,7 @@ class MazeGrids:
         along += exact * sideways
         missed |= exact > max_range
         exact[missed] = np.inf
-        return exact, np.where(across_x, edge, len(self.xs) - 1 - edge), along
+        return exact, edge, along
 
     # -- wall faces seen --------------------------------------------------------------------
     def bin_counts(self, spacing: float) -> tuple[int, int]:
@@ -176,11 +214,30 @@ class MazeGrids:
         """Bin index (same shape as ``faces``) of the wall points ``along`` (m) ``faces`` (as
         ``cast`` returns them): bins of ``spacing`` metres along each block edge, vertical edges
         first, then horizontal ones."""
-        along_y, along_x = self.bin_counts(spacing)
-        vertical = faces >= 0
-        step = ((along - np.where(vertical, self.ys[0], self.xs[0])) / spacing).astype(np.int64)
-        step = np.minimum(np.maximum(step, 0), np.where(vertical, along_y, along_x) - 1)
-        return np.where(vertical, faces * along_y + step, len(self.xs) * along_y + (-1 - faces) * along_x + step)
+        return self.edge_bins(np.where(faces >= 0, faces, len(self.xs) - 1 - faces), along, spacing)
+
+    def edge_bins(self, edge: np.ndarray, along: np.ndarray, spacing: float) -> np.ndarray:
+        """``face_bins`` of the points ``along`` (m) block edges ``edge`` (as ``cast_edges`` gives them)."""
+        base, low, top = self._bin_tables(spacing)
+        start = low[0] if (low == low[0]).all() else low.take(edge, mode="clip")
+        step = ((along - start) / spacing).astype(np.int64)
+        np.maximum(step, 0, out=step)
+        np.minimum(step, top.take(edge, mode="clip"), out=step)
+        step += base.take(edge, mode="clip")
+        return step
+
+    def _bin_tables(self, spacing: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Per block edge (``edges``): its first ``face_bins`` bin, where its bins start (m) and its
+        last bin's step."""
+        if getattr(self, "_bins_spacing", None) != spacing:
+            along_y, along_x = self.bin_counts(spacing)
+            vertical = np.arange(len(self.edges)) < len(self.xs)
+            base = np.where(vertical, np.arange(len(self.edges)) * along_y, 0)
+            base[~vertical] = len(self.xs) * along_y + np.arange(len(self.ys)) * along_x
+            low = np.where(vertical, self.ys[0], self.xs[0])
+            top = np.where(vertical, along_y, along_x) - 1
+            self._bins_spacing, self._bins = spacing, (base, low, top)
+        return self._bins
 
     def wall_bins(self, env: int, spacing: float) -> np.ndarray:
         """Which bins (``face_bins``) of maze ``env`` have their centre on a wall face: (bins,) bool."""
@@ -218,24 +275,27 @@ def push_out(position: np.ndarray, radius: float, boxes: np.ndarray, iterations:
     much less than a corridor's free width (boxes across a corridor are that far apart)."""
     touched = np.zeros(position.shape[1], dtype=bool)
     low, high = boxes[:2], boxes[2:]  # (2, E, B) each: x, y
-    discs = np.arange(position.shape[1])  # the discs looked at in this pass
+    reach = radius * radius
+    discs = None  # those looked at in this pass (None: all)
+    point = position[:, :, None]
     for _ in range(iterations):
-        point = position[:, discs, None]
         gap = point - np.minimum(np.maximum(point, low), high)  # from each box's nearest point (inf: none)
-        squared = (gap * gap).sum(axis=0)  # (E', B)
-        nearest = squared.argmin(axis=1)
-        deepest = squared[np.arange(len(discs)), nearest]
-        overlap = deepest < radius * radius
+        squared = gap[0] * gap[0]
+        squared += gap[1] * gap[1]  # (E', B)
+        deepest = squared.min(axis=1)
+        overlap = deepest < reach
         if not overlap.any():
             break
-        discs = discs[overlap]
+        nearest = squared[overlap].argmin(axis=1)
+        discs = np.flatnonzero(overlap) if discs is None else discs[overlap]
         touched[discs] = True
         distance = np.maximum(np.sqrt(deepest[overlap]), 1e-12)
-        position[:, discs] += gap[:, overlap, nearest[overlap]] * ((radius - distance) / distance)
-        corner = (squared[overlap] < radius * radius).sum(axis=1) > 1
+        position[:, discs] += gap[:, overlap, nearest] * ((radius - distance) / distance)
+        corner = (squared[overlap] < reach).sum(axis=1) > 1
         if not corner.any():
             break
         discs, low, high = discs[corner], low[:, overlap][:, corner], high[:, overlap][:, corner]
+        point = position[:, discs, None]
     return touched
 
 
@@ -263,12 +323,16 @@ class _Sensors:
         self.line = (_SENSE * lines).astype(np.int64)
         i, j = grids.blocks_of(x, y)
         inside = (i & j & 1).astype(bool)  # (K,) in a cell's interior, not in a wall band
-        # The blocks beside the cell: left, right, below, above (clipped for sensors not inside).
         block = envs * (height * width) + i * width + j
-        beside = grids.solid.take(block[:, None] + [-1, 1, -width, width], mode="clip") & inside[:, None]
-        self.own_done = beside[:, [2, 2, 3, 3, 0, 1, 0, 1]].ravel()
-        self.own_edge = np.where(_X_CODES, j[:, None], i[:, None] + len(grids.xs)) + _UP_CODES
-        self.own_edge = self.own_edge.astype(np.int32).ravel()
+        # Per ray code: the block beside the cell the ray leaves it through; the post at that gap's
+        # end (+1 along the axis crossed, a, +1 along the other, b), the neighbour cell's wall
+        # along b (+2 along a, +1 along b) and its far wall along a (+3 along a), in blocks.
+        solid = grids.solid.take(block[:, None, None] + grids.code_offsets, mode="clip")  # (K, 4, 8)
+        solid &= inside[:, None, None]
+        self.own_done, self.next_solid = solid[:, 0].ravel(), solid[:, 1:].transpose(1, 0, 2).reshape(3, -1)
+        edges = np.where(_CODE_EDGE_X, j[:, None, None], i[:, None, None] + len(grids.xs)) + _CODE_EDGE_STEP
+        edges = edges.astype(np.int32)  # (K, 3, 8): the own cell's face, the face along b, the far face
+        self.own_edge, self.side_edge, self.far_edge = (edges[:, k].ravel() for k in range(3))
         self.inside, self.envs = inside, envs
 
 
@@ -278,6 +342,20 @@ _SENSE = np.array([-1, 1])
 #: whether moving up along the axis crossed.
 _X_CODES = np.array([False] * 4 + [True] * 4)
 _UP_CODES = np.array([0, 0, 1, 1, 0, 1, 0, 1])
+_CODE = np.arange(8)
+_UP_B = np.where(_X_CODES, _CODE // 2 % 2, _CODE % 2)  # whether moving up along the other axis
+#: Per ray code, the block edges of ``_Sensors``' own, side and far faces: along x (else y), and
+#: the step from the own cell's block index.
+_CODE_EDGE_X = np.stack([_X_CODES, ~_X_CODES, _X_CODES])
+_CODE_EDGE_STEP = np.stack([_UP_CODES, _UP_B, _UP_CODES + 2 * (2 * _UP_CODES - 1)])
+
+
+def _code_offsets(width: int) -> np.ndarray:
+    """(4, 8) flat block offsets per ray code from a cell's block: beside it, the post, the side
+    wall and the far wall (``_Sensors``), for grids ``width`` blocks wide."""
+    along_a = np.where(_X_CODES, 1, width) * (2 * _UP_CODES - 1)
+    along_b = np.where(_X_CODES, width, 1) * (2 * _UP_B - 1)
+    return np.stack([along_a, along_a + along_b, 2 * along_a + along_b, 3 * along_a])
 
 
 class _BandCrossings:

@@ -308,14 +308,14 @@ class MazeVectorEnv(VectorEnv):
                 sensor_y + mount_x * sin_h + mount_y * cos_h,
             )
         grids = self._grids()
-        ranges, faces, along = grids.cast(envs, sensor_x, sensor_y, heading, self.bearings, laser.max_range)
+        ranges, edges, along = grids.cast_edges(envs, sensor_x, sensor_y, heading, self.bearings, laser.max_range)
         hit = np.isfinite(ranges)
         noisy = ranges + noise * laser.range_noise_std
         valid = hit & (noisy >= laser.min_range) & (noisy <= laser.max_range)
         if laser.dropout:
             valid &= uniforms >= laser.dropout
         self.last_scan[envs] = np.where(valid, noisy, 0.0)
-        bins = (envs[:, None] * self.seen.shape[1] + grids.face_bins(faces, along, WALL_SAMPLE_SPACING))[hit]
+        bins = (envs[:, None] * self.seen.shape[1] + grids.edge_bins(edges, along, WALL_SAMPLE_SPACING))[hit]
         new = np.unique(bins[self._unseen.ravel()[bins]])
         self.seen.ravel()[new] = True
         self._unseen.ravel()[new] = False
@@ -327,7 +327,9 @@ class MazeVectorEnv(VectorEnv):
         """Mark the cells the listed envs' robots stand in; return (E,) whether each was new."""
         rows, cols = self.visited.shape[1:]
         cells = (self.poses[envs, :2] // self._grids().cell_size).astype(np.int64)
-        cell = envs * (rows * cols) + np.clip(cells[:, 1], 0, rows - 1) * cols + np.clip(cells[:, 0], 0, cols - 1)
+        np.maximum(cells, 0, out=cells)
+        np.minimum(cells, [cols - 1, rows - 1], out=cells)
+        cell = envs * (rows * cols) + cells[:, 1] * cols + cells[:, 0]
         new = np.zeros(self.num_envs, dtype=bool)
         new[envs] = ~self.visited.ravel()[cell]
         self.visited.ravel()[cell] = True
