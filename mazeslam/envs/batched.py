@@ -260,11 +260,15 @@ class MazeGrids:
         offsets = np.arange(-bands, bands + 1)
         height, width = self.solid.shape[1:]
         i, j = self.blocks_of(x, y)
-        i = np.minimum(np.maximum(i[:, None, None] + offsets[:, None], 0), height - 1)  # (E, n, 1)
-        j = np.minimum(np.maximum(j[:, None, None] + offsets, 0), width - 1)  # (E, 1, n)
-        solid = self.solid[np.arange(len(x))[:, None, None], i, j]
-        bounds = (self.xs[j], self.ys[i], self.xs[j + 1], self.ys[i + 1])
-        return np.stack([np.where(solid, bound, np.inf) for bound in bounds]).reshape(4, len(x), -1)
+        i = np.minimum(np.maximum(i[:, None] + offsets, 0), height - 1)  # (E, n)
+        j = np.minimum(np.maximum(j[:, None] + offsets, 0), width - 1)  # (E, n)
+        count, size = len(x), len(offsets)
+        block = (np.arange(count) * (height * width))[:, None, None] + (i * width)[:, :, None] + j[:, None, :]
+        bounds = np.empty((4, count, size, size))
+        bounds[0], bounds[2] = self.xs.take(j)[:, None, :], self.xs.take(j + 1)[:, None, :]
+        bounds[1], bounds[3] = self.ys.take(i)[:, :, None], self.ys.take(i + 1)[:, :, None]
+        np.copyto(bounds, np.inf, where=~self.solid.take(block))
+        return bounds.reshape(4, count, -1)
 
 
 def push_out(position: np.ndarray, radius: float, boxes: np.ndarray, iterations: int = 3) -> np.ndarray:
@@ -286,15 +290,18 @@ def push_out(position: np.ndarray, radius: float, boxes: np.ndarray, iterations:
         overlap = deepest < reach
         if not overlap.any():
             break
-        nearest = squared[overlap].argmin(axis=1)
-        discs = np.flatnonzero(overlap) if discs is None else discs[overlap]
+        if discs is None:
+            discs = np.arange(len(overlap))
+        if not overlap.all():
+            discs, gap, squared, deepest = discs[overlap], gap[:, overlap], squared[overlap], deepest[overlap]
+            low, high = low[:, overlap], high[:, overlap]
         touched[discs] = True
-        distance = np.maximum(np.sqrt(deepest[overlap]), 1e-12)
-        position[:, discs] += gap[:, overlap, nearest] * ((radius - distance) / distance)
-        corner = (squared[overlap] < reach).sum(axis=1) > 1
+        distance = np.maximum(np.sqrt(deepest), 1e-12)
+        position[:, discs] += gap[:, np.arange(len(discs)), squared.argmin(axis=1)] * ((radius - distance) / distance)
+        corner = (squared < reach).sum(axis=1) > 1
         if not corner.any():
             break
-        discs, low, high = discs[corner], low[:, overlap][:, corner], high[:, overlap][:, corner]
+        discs, low, high = discs[corner], low[:, corner], high[:, corner]
         point = position[:, discs, None]
     return touched
 

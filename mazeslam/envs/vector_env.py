@@ -278,11 +278,12 @@ class MazeVectorEnv(VectorEnv):
         if len(touching):  # step by step from the first overlap on, pushed out of the walls
             first = int(overlaps[touching].argmax(axis=1).min())
             near, moved = boxes[:, touching], path[:, touching, first].copy()
+            moves = np.stack([step_x[touching], step_y[touching]])  # (2, E', steps)
+            pushed = np.zeros(len(touching), dtype=bool)
             for step in range(first, steps):
-                moved[0] += step_x[touching, step]
-                moved[1] += step_y[touching, step]
-                touched[touching] |= push_out(moved, robot.body_radius, near)
-            position[:, touching] = moved
+                moved += moves[:, :, step]
+                pushed |= push_out(moved, robot.body_radius, near)
+            position[:, touching], touched[touching] = moved, pushed
         self.poses = np.column_stack([position.T, wrap_angle(headings[:, -1])])
         return touched
 
@@ -314,7 +315,11 @@ class MazeVectorEnv(VectorEnv):
         valid = hit & (noisy >= laser.min_range) & (noisy <= laser.max_range)
         if laser.dropout:
             valid &= uniforms >= laser.dropout
-        self.last_scan[envs] = np.where(valid, noisy, 0.0)
+        if len(envs) == self.num_envs:  # every env (envs in order): in place
+            self.last_scan.fill(0.0)
+            np.copyto(self.last_scan, noisy, casting="same_kind", where=valid)
+        else:
+            self.last_scan[envs] = np.where(valid, noisy, 0.0)
         bins = (envs[:, None] * self.seen.shape[1] + grids.edge_bins(edges, along, WALL_SAMPLE_SPACING))[hit]
         new = np.unique(bins[self._unseen.ravel()[bins]])
         self.seen.ravel()[new] = True
