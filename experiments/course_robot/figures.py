@@ -11,7 +11,6 @@ Writes docs/img/course_log1_maps.png and docs/img/course_sim_maps.png.
 
 from __future__ import annotations
 
-import dataclasses
 import sys
 from pathlib import Path
 
@@ -20,7 +19,7 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
-from mazeslam.beam_detection import detected_geometry  # noqa: E402
+from mazeslam.beam_detection import with_detected_convention  # noqa: E402
 from mazeslam.envs.simulator import load_config, simulate  # noqa: E402
 from mazeslam.evaluation.metrics import absolute_trajectory_error  # noqa: E402
 from mazeslam.evaluation.sharpness import TRUSTED_SPAN, dead_reckoning_without_glitches, map_sharpness  # noqa: E402
@@ -86,9 +85,7 @@ def main() -> None:
     config = load_slam_config(COURSE)
     IMAGES.mkdir(parents=True, exist_ok=True)
     if LOG1.exists():
-        run = load_run(LOG1, config.sensor)
-        geometry, origin = detected_geometry(run, config.corners.min_range, config.corners.max_range)
-        run = dataclasses.replace(run, geometry=geometry, geometry_origin=origin)
+        run = with_detected_convention(load_run(LOG1, config.sensor), config)
         print(
             draw(
                 run,
