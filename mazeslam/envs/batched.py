@@ -135,16 +135,20 @@ class MazeGrids:
         measured exactly to that face, in float64.
         """
         count, beams = len(envs), len(bearings)
-        direction = _directions(heading, bearings).reshape(2, -1)  # (2, R) float64, R = K N
+        work = self._workspace(count, beams)
+        direction = _directions(heading, bearings, work.direction).reshape(2, -1)  # (2, R) float64, R = K N
         sensors = _Sensors(self, envs, x, y)
         up = direction > 0
-        inverse = np.abs(direction.astype(np.float32))
+        inverse = np.abs(direction, out=work.inverse, casting="same_kind")
         np.divide(1, inverse, out=inverse)  # (2, R) m along the ray per m along each axis
-        first = np.where(up.reshape(2, count, beams), sensors.ahead[..., 1:], sensors.ahead[..., :1]).reshape(2, -1)
+        first = work.first
+        np.copyto(first.reshape(2, count, beams), sensors.ahead[..., :1])
+        np.copyto(first.reshape(2, count, beams), sensors.ahead[..., 1:], where=up.reshape(2, count, beams))
         first *= inverse  # (2, R) m to the first band crossing along each axis
         across_x = first[0] <= first[1]
         # Leaving the own cell: the nearer first crossing, through a wall if the block there is solid.
-        code = np.repeat(np.arange(0, 8 * count, 8, dtype=np.int32), beams)
+        code = work.code
+        np.copyto(code, work.code_base)
         code += across_x.view(np.uint8) << 2 | up[1].view(np.uint8) << 1 | up[0].view(np.uint8)
         done = sensors.own_done.take(code)
         edge = sensors.own_edge.take(code)
@@ -170,19 +174,33 @@ class MazeGrids:
             across_x[rest], edge[rest], missed[rest] = rest_x, rest_edge, rest_missed
         return self._measure(sensors, direction, across_x, edge, missed, max_range, (count, beams))
 
+    def _workspace(self, count: int, beams: int) -> _Workspace:
+        """Arrays a cast of ``count`` sensors by ``beams`` beams reuses (not returned)."""
+        work = getattr(self, "_work", None)
+        if work is None or work.code.shape != (count * beams,):
+            work = self._work = _Workspace(count, beams)
+        return work
+
     def _measure(self, sensors, direction, across_x, edge, missed, max_range, shape):
         """``cast``'s ``(distances, faces, along)`` of the rays along ``direction`` (2, R) that meet
         the block edge ``edge`` (R,) (an index into ``xs`` then ``ys``), a vertical one where
         ``across_x``; none where ``missed``."""
         across_x, edge, missed = across_x.reshape(shape), edge.reshape(shape), missed.reshape(shape)
-        normal = np.where(across_x, direction[0].reshape(shape), direction[1].reshape(shape))
-        sideways = np.where(across_x, direction[1].reshape(shape), direction[0].reshape(shape))
-        origin_x, origin_y = (np.repeat(part, shape[1]).reshape(shape) for part in sensors.origin)
+        work = self._workspace(*shape)
+        normal, sideways, origin, other = work.normal, work.sideways, work.origin, work.other
+        np.copyto(normal, direction[1].reshape(shape))
+        np.copyto(normal, direction[0].reshape(shape), where=across_x)
+        np.copyto(sideways, direction[0].reshape(shape))
+        np.copyto(sideways, direction[1].reshape(shape), where=across_x)
+        np.copyto(origin, sensors.origin[1][:, None])
+        np.copyto(origin, sensors.origin[0][:, None], where=across_x)
+        np.copyto(other, sensors.origin[0][:, None])
+        np.copyto(other, sensors.origin[1][:, None], where=across_x)
         position = self.edges.take(edge, mode="clip")
-        position -= np.where(across_x, origin_x, origin_y)
+        position -= origin
         exact = np.divide(position, normal, out=position)
-        along = np.where(across_x, origin_y, origin_x)
-        along += exact * sideways
+        np.multiply(exact, sideways, out=sideways)
+        along = sideways + other
         missed |= exact > max_range
         exact[missed] = np.inf
         return exact, edge, along
@@ -304,6 +322,18 @@ def push_out(position: np.ndarray, radius: float, boxes: np.ndarray, iterations:
         discs, low, high = discs[corner], low[:, corner], high[:, corner]
         point = position[:, discs, None]
     return touched
+
+
+class _Workspace:
+    """``MazeGrids.cast_edges``' own arrays for K sensors by N beams, kept from cast to cast."""
+
+    def __init__(self, count: int, beams: int):
+        self.direction = np.empty((2, count, beams))
+        self.inverse = np.empty((2, count * beams), dtype=np.float32)
+        self.first = np.empty((2, count * beams), dtype=np.float32)
+        self.code_base = np.repeat(np.arange(0, 8 * count, 8, dtype=np.int32), beams)
+        self.code = np.empty_like(self.code_base)
+        self.normal, self.sideways, self.origin, self.other = np.empty((4, count, beams))
 
 
 class _Sensors:
@@ -488,12 +518,12 @@ class _BandCrossings:
         return across_x, np.where(across_x, edge[0], edge[1]), missed
 
 
-def _directions(heading: np.ndarray, bearings: np.ndarray) -> np.ndarray:
+def _directions(heading: np.ndarray, bearings: np.ndarray, out: np.ndarray | None = None) -> np.ndarray:
     """(2, K, N) world unit vectors (x, y) of the beams ``bearings`` (N,) (rad) of sensors facing
     ``heading`` (K,) (rad); components under ``TINY_COMPONENT`` raised to it."""
     cos_h, sin_h = np.cos(heading)[:, None], np.sin(heading)[:, None]
     cos_b, sin_b = np.cos(bearings), np.sin(bearings)
-    direction = np.empty((2, len(heading), len(bearings)))
+    direction = np.empty((2, len(heading), len(bearings))) if out is None else out
     np.multiply(cos_h, cos_b, out=direction[0])
     direction[0] -= sin_h * sin_b
     np.multiply(sin_h, cos_b, out=direction[1])
