@@ -25,7 +25,6 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 import numpy as np
-from scipy.spatial import cKDTree
 
 from mazeslam import log
 from mazeslam.beams import BeamGeometry, SensorOverrides
@@ -132,6 +131,8 @@ def _matched_pair(course_log, a: int, b: int, motion, bearings, min_range: float
         return None
     dtheta = motion[2]
     moved = q_b @ np.array([[math.cos(dtheta), math.sin(dtheta)], [-math.sin(dtheta), math.cos(dtheta)]])
+    from scipy.spatial import cKDTree  # here: scipy.spatial is slow to load, and a cached detection skips it
+
     return cKDTree(q_a), moved, np.asarray(motion[:2])
 
 

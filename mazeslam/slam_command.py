@@ -12,14 +12,11 @@ from mazeslam.beams import SensorOverrides
 from mazeslam.config import with_changes
 from mazeslam.evaluation import slam_report
 from mazeslam.evaluation.consistency import EXPLANATION, OBSERVATION_BOUND_95, POSE_BOUND_95, nis_summary
-from mazeslam.evaluation.map_export import export_map
 from mazeslam.evaluation.scoring import RPE_DISTANCE, score_run
 from mazeslam.evaluation.sharpness import map_sharpness, sharpness_line
-from mazeslam.evaluation.slam_view import scan_source
 from mazeslam.filters.corners import CornerExtractor
 from mazeslam.loaded_run import LoadedRun, load_run
 from mazeslam.slam import MapKind, SlamConfig, SlamResult, load_slam_config, slam_on_run
-from mazeslam.smooth_command import optimum_columns, optimum_line
 
 #: About how many frames ``--animate`` draws, whatever the log's length.
 ANIMATION_FRAMES = 150
@@ -111,6 +108,8 @@ def run_slam_command(
         extra["ate"] = score.table.reset_index().to_dict(orient="records")
         extra["map_error"] = score.map_errors
         extra["nees"] = score.nees_summary
+        from mazeslam.smooth_command import optimum_columns, optimum_line  # the smoother: only with truth
+
         optimum = optimum_columns(run, config, score)
         if optimum is not None:
             lines.append(optimum_line(optimum))
@@ -135,6 +134,8 @@ def run_slam_command(
         true_landmarks=run.true_corners if run.world is not None else None,
         truth_label=truth_label,
     )
+    from mazeslam.evaluation.map_export import export_map
+
     paths.update(
         export_map(
             out_dir,
@@ -148,6 +149,8 @@ def run_slam_command(
         )
     )
     if animate:
+        from mazeslam.evaluation.slam_view import scan_source
+
         extractor = CornerExtractor(run.geometry, run.log.width, config.corners)
         paths["animation"] = slam_report.animate_slam(
             Path(out_dir) / "slam.gif",

@@ -26,7 +26,6 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 import numpy as np
-from scipy.spatial import cKDTree
 
 from mazeslam.beams import BeamGeometry
 from mazeslam.config import require
@@ -107,6 +106,8 @@ class ReferenceScan:
 
     def __init__(self, points: np.ndarray, params: ScanMatchParams):
         self.points = points
+        from scipy.spatial import cKDTree  # here: scipy.spatial is slow to load, and only matching needs it
+
         self.tree = cKDTree(points)
         k = min(params.neighbours, len(points))
         _, nearest = self.tree.query(points, k=k)

@@ -33,8 +33,6 @@ import time
 from dataclasses import dataclass, field
 
 import numpy as np
-from scipy.special import logsumexp
-from tqdm.auto import tqdm
 
 from mazeslam.beams import BeamGeometry
 from mazeslam.config import require
@@ -206,7 +204,7 @@ class GridSlam:
         centre = mode if accepted else predicted
         stencil = centre + STENCIL * self.params.kernel_step
         log_tau = field.objective(stencil, points, predicted, information, match)
-        log_eta = float(logsumexp(log_tau))
+        log_eta = float(log_tau.max() + np.log(np.exp(log_tau - log_tau.max()).sum()))
         if not accepted:
             return centre, log_eta, False
         weights = np.exp(log_tau - log_eta)
@@ -397,6 +395,8 @@ def run_grid_slam(
     processed, resampled = np.zeros(count, bool), np.zeros(count, bool)
     matched, neff, seconds = np.full(count, np.nan), np.full(count, float(particles)), np.empty(count)
     pending, peak_map_bytes = np.zeros(3), 0
+    from tqdm.auto import tqdm  # here: the slam config names the grid's settings, and tqdm is slow to load
+
     for index in tqdm(range(count), desc="grid SLAM", unit="scan", disable=not progress):
         started = time.perf_counter()
         pending = compose(pending, motions[index])

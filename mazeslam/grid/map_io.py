@@ -14,7 +14,6 @@ from __future__ import annotations
 from dataclasses import dataclass
 from pathlib import Path
 
-import cv2
 import numpy as np
 import yaml
 
@@ -71,7 +70,9 @@ def write_map(
     image = to_image(occupancy.states)
     height, width = image.shape
     (folder / f"{name}.pgm").write_bytes(f"P5\n{width} {height}\n255\n".encode() + image.tobytes())
-    cv2.imwrite(str(folder / f"{name}.png"), image)
+    from matplotlib import image as images  # matplotlib writes the figures anyway; OpenCV is slow to load
+
+    images.imsave(folder / f"{name}.png", image, cmap="gray", vmin=0, vmax=255)
     description = {
         "image": f"{name}.pgm",
         "resolution": float(occupancy.resolution),
@@ -92,6 +93,8 @@ def read_map(yaml_path: str | Path) -> OccupancyMap:
     missing = {"image", "resolution", "origin", "occupied_thresh", "free_thresh"} - set(description)
     if missing:
         raise ValueError(f"{yaml_path}: missing {', '.join(sorted(missing))}")
+    import cv2  # here: OpenCV is slow to load, and only reading a map back needs it
+
     image = cv2.imread(str(yaml_path.parent / description["image"]), cv2.IMREAD_GRAYSCALE)
     if image is None:
         raise ValueError(f"{yaml_path}: cannot read the image {description['image']!r}")
