@@ -110,6 +110,8 @@ class MazeVectorEnv(VectorEnv):
         self._normals = np.zeros((num_envs, DRAW_AHEAD, 2 * self.physics_steps + laser.beams), dtype=np.float32)
         self._uniforms = np.ones((num_envs, DRAW_AHEAD, laser.beams), dtype=np.float32) if laser.dropout else None
         self._no_dropouts = np.ones((num_envs, laser.beams))
+        self._noise = np.empty((num_envs, laser.beams), dtype=np.float32)  # a scan's noise, m
+        self._noisy = np.empty((num_envs, laser.beams))  # a scan's noisy ranges, m
         self._drawn = np.full(num_envs, DRAW_AHEAD)
 
     # -- episode ------------------------------------------------------------------------------
@@ -311,7 +313,8 @@ class MazeVectorEnv(VectorEnv):
         grids = self._grids()
         ranges, edges, along = grids.cast_edges(envs, sensor_x, sensor_y, heading, self.bearings, laser.max_range)
         hit = np.isfinite(ranges)
-        noisy = ranges + noise * laser.range_noise_std
+        noisy = np.multiply(noise, laser.range_noise_std, out=self._noise[: len(envs)])
+        noisy = np.add(ranges, noisy, out=self._noisy[: len(envs)])
         valid = hit & (noisy >= laser.min_range) & (noisy <= laser.max_range)
         if laser.dropout:
             valid &= uniforms >= laser.dropout
