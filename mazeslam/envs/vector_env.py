@@ -226,9 +226,9 @@ class MazeVectorEnv(VectorEnv):
         """Refill env ``env``'s ``DRAW_AHEAD`` steps of draws from its generator."""
         rng = self.generators[env]
         assert rng is not None  # reset first
-        self._normals[env] = rng.standard_normal(self._normals.shape[1:], dtype=np.float32)
+        rng.standard_normal(dtype=np.float32, out=self._normals[env])
         if self._uniforms is not None:
-            self._uniforms[env] = rng.random(self._uniforms.shape[1:], dtype=np.float32)
+            rng.random(dtype=np.float32, out=self._uniforms[env])
         self._drawn[env] = 0
 
     # -- physics ------------------------------------------------------------------------------
