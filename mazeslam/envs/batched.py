@@ -3,15 +3,18 @@
 The mazes are held as their solid-block grids (``walls.solid_blocks``): E grids of (2R+1, 2C+1)
 blocks sharing the block edges ``xs`` (2C+2,) and ``ys`` (2R+2,), metres. On them:
 
-* ``MazeGrids.cast``: one ray cast for every robot's beams. A ray can only enter a solid block
-  where it enters a wall band (cell interiors are free), and its entries into the bands along each
-  axis are evenly spaced along it: all rays look at a few of those crossings per pass, in numpy
-  arrays, until each has met a wall or passed ``max_range`` (``_BandCrossings``); exact for the
-  maze's axis-aligned thick walls, and cheap, since a ray in a maze meets a wall within few cells.
+* ``MazeGrids.cast`` (``cast_edges``): one ray cast for every robot's beams. A ray can only enter a
+  solid block where it enters a wall band (cell interiors are free), and its entries into the bands
+  along each axis are evenly spaced along it. Most rays meet a wall of their sensor's cell or of
+  the neighbour cell they enter through an open side: those are settled from their first crossings
+  and per-sensor tables of the blocks around (``_Sensors``); the others look at a few crossings per
+  pass, in numpy arrays, until each has met a wall or passed ``max_range`` (``_BandCrossings``).
+  Exact for the maze's axis-aligned thick walls, and cheap, since a ray in a maze meets a wall
+  within few cells.
 * ``push_out``: robot discs pushed out of the solid blocks they overlap, along the
   shortest way out, as ``World`` does with pymunk's contacts: a disc slides along a wall it drives
   against and never passes through one (a step moves it much less than its radius).
-* ``MazeGrids.face_bins``: where each beam landed, as a bin of ``spacing`` metres on a wall face,
+* ``MazeGrids.face_bins`` (``edge_bins``): where each beam landed, as a bin of ``spacing`` metres on a wall face,
   to count the wall surface seen.
 """
 
