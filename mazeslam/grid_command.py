@@ -1,7 +1,8 @@
 """``mazeslam slam`` with ``[map] kind = "grid"``: the grid filter over a log, its outputs, how it did.
 
 Outputs in the run's folder: ``occupancy.pgm`` + ``occupancy.yaml`` (ROS map_server) and
-``occupancy.png`` (the best particle's map), ``trajectory.csv`` (the cloud's weighted mean at every
+``occupancy.png`` (the best particle's map), ``slam.png`` (that map with the paths and particles),
+``trajectory.csv`` (the cloud's weighted mean at every
 record with its covariance), ``best_trajectory.csv`` (the best particle's path) and ``map.json``
 (run facts and, with truth, the errors; strict JSON).
 """
@@ -18,6 +19,7 @@ from mazeslam.evaluation.consistency import POSE_BOUND_95, nees_summary
 from mazeslam.evaluation.metrics import normalized_estimation_error
 from mazeslam.evaluation.scoring import DEAD_RECKONING, error_table
 from mazeslam.evaluation.sharpness import dead_reckoning_without_glitches, map_sharpness, sharpness_line
+from mazeslam.grid.figure import plot_grid_run
 from mazeslam.grid.filter import GridSlamParams, GridSlamResult, run_grid_slam
 from mazeslam.grid.map_io import grid_states, write_map
 from mazeslam.loaded_run import LoadedRun
@@ -58,6 +60,16 @@ def run_grid_command(run: LoadedRun, config: SlamConfig, out_dir: Path, progress
     sidecars.write_trajectory(paths["trajectory"], run.log.times, mean, covariances)
     best = result.record_trajectory()[0]
     sidecars.write_truth(paths["best_trajectory"], run.log.times, best)
+    paths["figure"] = plot_grid_run(
+        out_dir / "slam.png",
+        grid_states(result.grid),
+        mean,
+        best,
+        result.particles.poses,
+        f"{run.path.name}: grid filter, {params.particles} particles",
+        run.truth,
+        "reference path" if run.truth_is_reference else "true path",
+    )
     duration, seconds = run.log.duration, result.total_seconds
     lines = [
         f"{run.path}: {len(run.log)} records, {len(result.scan_records)} scans "

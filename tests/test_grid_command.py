@@ -39,6 +39,7 @@ def test_the_grid_command_writes_a_map_server_map_and_closes_the_loop(building, 
         main, ["slam", str(simulated.path), "--config", str(config), "--out", str(out), "--quiet"]
     )
     assert result.exit_code == 0, result.output
+    assert (out / "slam.png").stat().st_size > 10_000  # the map with the paths and particles
     occupancy = read_map(out / "occupancy.yaml")
     assert (occupancy.states == OCCUPIED).sum() > 500 and occupancy.resolution > 0
     times, poses, covariances = sidecars.read_trajectory(out / "trajectory.csv")
