@@ -322,7 +322,11 @@ def corners(
 
 @main.command()
 @click.argument("log_file", type=click.Path(exists=True, dir_okay=False, path_type=Path))
-@click.option("--particles", type=PARTICLES, help="NPARTICLES [default: from the config, 100].")
+@click.option(
+    "--particles",
+    type=PARTICLES,
+    help="Particle count of the filter that runs [default: from the config; 100 without one].",
+)
 @click.option(
     "--config",
     "config_path",
