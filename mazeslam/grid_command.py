@@ -18,7 +18,7 @@ from mazeslam.config import jsonable
 from mazeslam.evaluation.consistency import POSE_BOUND_95, nees_summary
 from mazeslam.evaluation.metrics import normalized_estimation_error
 from mazeslam.evaluation.scoring import DEAD_RECKONING, error_table
-from mazeslam.evaluation.sharpness import dead_reckoning_without_glitches, map_sharpness, sharpness_line
+from mazeslam.evaluation.sharpness import dead_reckoning_without_glitches, paths_sharpness, sharpness_lines
 from mazeslam.grid.figure import plot_grid_run
 from mazeslam.grid.filter import GridSlamParams, GridSlamResult, run_grid_slam
 from mazeslam.grid.map_io import grid_states, write_map
@@ -94,15 +94,9 @@ def run_grid_command(run: LoadedRun, config: SlamConfig, out_dir: Path, progress
         "peak_map_bytes": result.peak_map_bytes,
         "occupancy": paths["occupancy"].name,
     }
-    sharpness = {
-        name: map_sharpness(run, poses, config.odometry.jump_tolerance, params.grid.min_range, params.grid.max_range)
-        for name, poses in (("mean path", mean), ("best particle", best))
-    }
-    lines.append(
-        f"Map sharpness (scan returns of {params.grid.min_range:g}-{params.grid.max_range:g} m placed along each path; "
-        "dead reckoning leaves the glitches out):"
-    )
-    lines += ["  " + sharpness_line(name, value) for name, value in sharpness.items()]
+    span = params.grid.min_range, params.grid.max_range
+    sharpness = paths_sharpness(run, {"mean path": mean, "best particle": best}, config.odometry.jump_tolerance, *span)
+    lines += sharpness_lines(sharpness, *span)
     document["sharpness"] = {name: value.to_dict() for name, value in sharpness.items()}
     if run.truth is not None:
         table, nees = _errors(run, result, config.odometry.jump_tolerance)

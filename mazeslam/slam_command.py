@@ -13,7 +13,7 @@ from mazeslam.config import with_changes
 from mazeslam.evaluation import slam_report
 from mazeslam.evaluation.consistency import EXPLANATION, OBSERVATION_BOUND_95, POSE_BOUND_95, nis_summary
 from mazeslam.evaluation.scoring import RPE_DISTANCE, score_run
-from mazeslam.evaluation.sharpness import map_sharpness, sharpness_line
+from mazeslam.evaluation.sharpness import paths_sharpness, sharpness_lines
 from mazeslam.filters.corners import CornerExtractor
 from mazeslam.loaded_run import LoadedRun, load_run
 from mazeslam.slam import MapKind, SlamConfig, SlamResult, load_slam_config, slam_on_run
@@ -95,13 +95,10 @@ def run_slam_command(
     }
     lines += _uncertainty_lines(nis, score.nees_summary if score is not None else None)
     if run.log.n_beams:
-        sharpness = {
-            name: map_sharpness(
-                run, poses, config.odometry.jump_tolerance, config.corners.min_range, config.corners.max_range
-            )
-            for name, poses in (("mean path", result.mean_poses), ("best particle", result.best_poses))
-        }
-        lines += _sharpness_lines(sharpness, config)
+        span = config.corners.min_range, config.corners.max_range
+        placed_by = {"mean path": result.mean_poses, "best particle": result.best_poses}
+        sharpness = paths_sharpness(run, placed_by, config.odometry.jump_tolerance, *span)
+        lines += sharpness_lines(sharpness, *span)
         extra["sharpness"] = {name: value.to_dict() for name, value in sharpness.items()}
     if score is not None:
         lines += _score_lines(run, result, score, config.evaluation.match_radius)
@@ -231,14 +228,6 @@ def _uncertainty_lines(nis: dict, nees: dict | None) -> list[str]:
     if nees is not None:
         line += f"; pose NEES {described(nees, POSE_BOUND_95, 3)}"
     return [line, "  " + EXPLANATION]
-
-
-def _sharpness_lines(sharpness: dict, config: SlamConfig) -> list[str]:
-    """How sharp the scans' walls are along each path, beside dead reckoning (no truth needed)."""
-    return [
-        f"Map sharpness (scan returns of {config.corners.min_range:g}-{config.corners.max_range:g} m placed along "
-        "each path; dead reckoning leaves the glitches out):"
-    ] + ["  " + sharpness_line(name, value) for name, value in sharpness.items()]
 
 
 def _score_lines(run: LoadedRun, result: SlamResult, score, match_radius: float) -> list[str]:

@@ -22,7 +22,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 from mazeslam.beam_detection import with_detected_convention  # noqa: E402
 from mazeslam.envs.simulator import load_config, simulate  # noqa: E402
 from mazeslam.evaluation.metrics import absolute_trajectory_error  # noqa: E402
-from mazeslam.evaluation.sharpness import TRUSTED_SPAN, dead_reckoning_without_glitches, map_sharpness  # noqa: E402
+from mazeslam.evaluation.sharpness import TRUSTED_SPAN, dead_reckoning_without_glitches, paths_sharpness  # noqa: E402
 from mazeslam.evaluation.slam_report import scan_points_world  # noqa: E402
 from mazeslam.grid_command import grid_on_run  # noqa: E402
 from mazeslam.loaded_run import LoadedRun, load_run  # noqa: E402
@@ -52,11 +52,12 @@ def paths_of(run: LoadedRun, config: SlamConfig) -> dict:
 def draw(run: LoadedRun, config: SlamConfig, title: str, out: Path) -> Path:
     """One panel per path: the scan returns placed along it, the path, and the truth when there is one."""
     paths = paths_of(run, config)
+    sharpness = paths_sharpness(run, paths, config.odometry.jump_tolerance)
     fig, axes = plt.subplots(
         1, len(paths), figsize=(5.2 * len(paths), 6.2), sharex=True, sharey=True, layout="constrained"
     )
     for ax, (name, poses) in zip(axes, paths.items()):
-        sharp = map_sharpness(run, poses, config.odometry.jump_tolerance)
+        sharp = sharpness[name]
         points = scan_points_world(run.log, poses, run.geometry, *TRUSTED_SPAN)
         if run.walls is not None:
             for index, (x1, y1, x2, y2) in enumerate(run.walls):

@@ -27,7 +27,7 @@ from mazeslam.beam_detection import with_detected_convention
 from mazeslam.envs.simulator import load_config, simulate
 from mazeslam.evaluation.consistency import nees_summary
 from mazeslam.evaluation.metrics import absolute_trajectory_error, normalized_estimation_error
-from mazeslam.evaluation.sharpness import dead_reckoning_without_glitches, map_sharpness, path_extent
+from mazeslam.evaluation.sharpness import dead_reckoning_without_glitches, path_extent, paths_sharpness
 from mazeslam.grid.filter import odometry_at_record_times
 from mazeslam.grid_command import grid_on_run
 from mazeslam.loaded_run import LoadedRun, load_run
@@ -75,8 +75,9 @@ def rows_for(run: LoadedRun, config: SlamConfig, log_name: str, seeds) -> list[d
     for kind in (MapKind.GRID, MapKind.LANDMARKS):
         for seed in seeds:
             paths, farthest = estimate(run, config, kind, seed)
+            sharpness = paths_sharpness(run, {name: poses for name, (poses, _) in paths.items()}, tolerance)
             for path_name, (poses, covariances) in paths.items():
-                sharp = map_sharpness(run, poses, tolerance)
+                sharp = sharpness[path_name]
                 row = {"log": log_name, "filter": FILTER_NAMES[kind], "seed": seed, "path": path_name}
                 row |= {
                     "sharpness_ratio": sharp.ratio,

@@ -84,6 +84,28 @@ def dead_reckoning_without_glitches(run: LoadedRun, jump_tolerance: float) -> np
     return dead_reckoning(run.log_without_glitches(jump_tolerance), run.start_pose)
 
 
+def paths_sharpness(
+    run: LoadedRun,
+    paths: dict[str, np.ndarray],
+    jump_tolerance: float = math.inf,
+    min_range: float = TRUSTED_SPAN[0],
+    max_range: float = TRUSTED_SPAN[1],
+) -> dict[str, Sharpness]:
+    """Sharpness of ``run``'s scans placed by each of ``paths`` (name -> (R, 3) poses), each
+    beside dead reckoning (placed and counted once)."""
+    reckoned = dead_reckoning_without_glitches(run, jump_tolerance)
+    reckoned_cells = occupied_cells(run.log, reckoned, run.geometry, min_range, max_range)
+    return {
+        name: Sharpness(
+            occupied_cells(run.log, poses, run.geometry, min_range, max_range),
+            reckoned_cells,
+            path_extent(poses),
+            path_extent(reckoned),
+        )
+        for name, poses in paths.items()
+    }
+
+
 def map_sharpness(
     run: LoadedRun,
     poses: np.ndarray,
@@ -92,19 +114,16 @@ def map_sharpness(
     max_range: float = TRUSTED_SPAN[1],
 ) -> Sharpness:
     """Sharpness of ``run``'s scans placed by ``poses`` (R, 3) and by dead reckoning."""
-    reckoned = dead_reckoning_without_glitches(run, jump_tolerance)
-    return Sharpness(
-        occupied_cells(run.log, poses, run.geometry, min_range, max_range),
-        occupied_cells(run.log, reckoned, run.geometry, min_range, max_range),
-        path_extent(poses),
-        path_extent(reckoned),
-    )
+    return paths_sharpness(run, {"path": poses}, jump_tolerance, min_range, max_range)["path"]
 
 
-def sharpness_line(name: str, sharpness: Sharpness) -> str:
-    """One line for the terminal: the counts, their ratio and the extents'."""
-    return (
-        f"{name}: {sharpness.cells} occupied 1 cm cells against dead reckoning's "
-        f"{sharpness.dead_reckoning_cells} (x{sharpness.ratio:.2f}; fewer = sharper walls), path extent "
-        f"x{sharpness.extent_ratio:.2f} of dead reckoning's"
-    )
+def sharpness_lines(sharpness: dict[str, Sharpness], min_range: float, max_range: float) -> list[str]:
+    """Lines for the terminal: a heading, then per path the counts, their ratio and the extents'."""
+    return [
+        f"Map sharpness (scan returns of {min_range:g}-{max_range:g} m placed along each path; dead reckoning "
+        "leaves the glitches out):"
+    ] + [
+        f"  {name}: {value.cells} occupied 1 cm cells against dead reckoning's {value.dead_reckoning_cells} "
+        f"(x{value.ratio:.2f}; fewer = sharper walls), path extent x{value.extent_ratio:.2f} of dead reckoning's"
+        for name, value in sharpness.items()
+    ]
