@@ -174,7 +174,7 @@ def test_batched_ray_cast_matches_the_segment_ray_caster(per_maze):
     sensors = np.repeat(np.arange(4), per_maze)
     x, y = rng.uniform(0.02, 1.18, (2, len(sensors)))  # anywhere, in walls' gaps and near corners too
     heading = rng.uniform(-np.pi, np.pi, len(sensors))
-    ranges, _, _ = envs.grids.cast(sensors, x, y, heading, envs.bearings, 0.8)
+    ranges, _, _ = envs.grids.cast_edges(sensors, x, y, heading, envs.bearings, 0.8)
     checked = 0
     for k, index in enumerate(sensors):
         geometry = wall_geometry(mazes[index])

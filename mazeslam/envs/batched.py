@@ -3,7 +3,7 @@
 The mazes are held as their solid-block grids (``walls.solid_blocks``): E grids of (2R+1, 2C+1)
 blocks sharing the block edges ``xs`` (2C+2,) and ``ys`` (2R+2,), metres. On them:
 
-* ``MazeGrids.cast`` (``cast_edges``): one ray cast for every robot's beams. A ray can only enter a
+* ``MazeGrids.cast_edges``: one ray cast for every robot's beams. A ray can only enter a
   solid block where it enters a wall band (cell interiors are free), and its entries into the bands
   along each axis are evenly spaced along it. Most rays meet a wall of their sensor's cell or of
   the neighbour cell they enter through an open side: those are settled from their first crossings
@@ -14,8 +14,8 @@ blocks sharing the block edges ``xs`` (2C+2,) and ``ys`` (2R+2,), metres. On the
 * ``push_out``: robot discs pushed out of the solid blocks they overlap, along the
   shortest way out, as ``World`` does with pymunk's contacts: a disc slides along a wall it drives
   against and never passes through one (a step moves it much less than its radius).
-* ``MazeGrids.face_bins`` (``edge_bins``): where each beam landed, as a bin of ``spacing`` metres on a wall face,
-  to count the wall surface seen.
+* ``MazeGrids.edge_bins``: where each beam landed, as a bin of ``spacing`` metres on a wall face, to
+  count the wall surface seen.
 """
 
 from __future__ import annotations
@@ -31,7 +31,7 @@ from mazeslam.envs.walls import block_edges, solid_blocks
 #: Smallest |direction component| of a ray; smaller ones are raised to it (the ray then never
 #: reaches the next edge along that axis within any range).
 TINY_COMPONENT = 1e-12
-#: Band crossings per axis ``MazeGrids.cast`` looks at per pass, for the rays not settled in their
+#: Band crossings per axis ``MazeGrids.cast_edges`` looks at per pass, for the rays not settled in their
 #: sensor's cell.
 LOOKAHEAD = 6
 #: Relative error allowed to the float32 distances of ``_BandCrossings`` (float32 rounding is 6e-8).
@@ -91,27 +91,6 @@ class MazeGrids:
         )
 
     # -- ray casting ------------------------------------------------------------------------
-    def cast(
-        self,
-        envs: np.ndarray,
-        x: np.ndarray,
-        y: np.ndarray,
-        heading: np.ndarray,
-        bearings: np.ndarray,
-        max_range: float,
-    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """Cast beams from K sensors, sensor k at (x[k], y[k]) (m) facing ``heading[k]`` (rad) in maze
-        ``envs[k]``, along ``bearings`` (N,) (rad, sensor frame). Every sensor must stand in free space.
-
-        Returns ``(distances, faces, along)``, all (K, N): metres to the first wall (``inf`` where
-        none lies within ``max_range``); the wall face hit: ``f >= 0`` the vertical face on
-        ``x = xs[f]``, ``f < 0`` the horizontal face on ``y = ys[-1 - f]``; and where along that
-        face, metres (y on a vertical face, x on a horizontal one). Faces and ``along`` are
-        meaningless where the distance is inf. See ``cast_edges``.
-        """
-        distances, edges, along = self.cast_edges(envs, x, y, heading, bearings, max_range)
-        return distances, np.where(edges < len(self.xs), edges, len(self.xs) - 1 - edges), along
-
     def cast_edges(
         self,
         envs: np.ndarray,
@@ -185,7 +164,7 @@ class MazeGrids:
         return work
 
     def _measure(self, sensors, direction, across_x, edge, missed, max_range, shape):
-        """``cast``'s ``(distances, faces, along)`` of the rays along ``direction`` (2, R) that meet
+        """``cast_edges``'s ``(distances, edges, along)`` of the rays along ``direction`` (2, R) that meet
         the block edge ``edge`` (R,) (an index into ``xs`` then ``ys``), a vertical one where
         ``across_x``; none where ``missed``."""
         across_x, edge, missed = across_x.reshape(shape), edge.reshape(shape), missed.reshape(shape)
@@ -214,12 +193,12 @@ class MazeGrids:
         return (math.ceil((self.ys[-1] - self.ys[0]) / spacing), math.ceil((self.xs[-1] - self.xs[0]) / spacing))
 
     def bin_total(self, spacing: float) -> int:
-        """How many ``face_bins`` there are."""
+        """How many ``edge_bins`` there are."""
         along_y, along_x = self.bin_counts(spacing)
         return len(self.xs) * along_y + len(self.ys) * along_x
 
     def bin_points(self, bins: np.ndarray, spacing: float) -> np.ndarray:
-        """(K, 2) centres (m) of ``face_bins`` ``bins`` (K,)."""
+        """(K, 2) centres (m) of ``edge_bins`` ``bins`` (K,)."""
         along_y, along_x = self.bin_counts(spacing)
         vertical = bins < len(self.xs) * along_y
         line, step = np.where(vertical, np.divmod(bins, along_y), np.divmod(bins - len(self.xs) * along_y, along_x))
@@ -231,14 +210,10 @@ class MazeGrids:
             ]
         )
 
-    def face_bins(self, faces: np.ndarray, along: np.ndarray, spacing: float) -> np.ndarray:
-        """Bin index (same shape as ``faces``) of the wall points ``along`` (m) ``faces`` (as
-        ``cast`` returns them): bins of ``spacing`` metres along each block edge, vertical edges
-        first, then horizontal ones."""
-        return self.edge_bins(np.where(faces >= 0, faces, len(self.xs) - 1 - faces), along, spacing)
-
     def edge_bins(self, edge: np.ndarray, along: np.ndarray, spacing: float) -> np.ndarray:
-        """``face_bins`` of the points ``along`` (m) block edges ``edge`` (as ``cast_edges`` gives them)."""
+        """Bin index (same shape as ``edge``) of the wall points ``along`` (m) block edges ``edge`` (as
+        ``cast_edges`` gives them): bins of ``spacing`` metres along each block edge, vertical edges
+        first, then horizontal ones."""
         base, low, top = self._bin_tables(spacing)
         start = low[0] if (low == low[0]).all() else low.take(edge, mode="clip")
         step = ((along - start) / spacing).astype(np.int64)
@@ -248,7 +223,7 @@ class MazeGrids:
         return step
 
     def _bin_tables(self, spacing: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """Per block edge (``edges``): its first ``face_bins`` bin, where its bins start (m) and its
+        """Per block edge (``edges``): its first ``edge_bins`` bin, where its bins start (m) and its
         last bin's step."""
         if getattr(self, "_bins_spacing", None) != spacing:
             along_y, along_x = self.bin_counts(spacing)
@@ -261,7 +236,7 @@ class MazeGrids:
         return self._bins
 
     def wall_bins(self, env: int, spacing: float) -> np.ndarray:
-        """Which bins (``face_bins``) of maze ``env`` have their centre on a wall face: (bins,) bool."""
+        """Which bins (``edge_bins``) of maze ``env`` have their centre on a wall face: (bins,) bool."""
         along_y, along_x = self.bin_counts(spacing)
         padded = np.pad(self.solid[env], 1, constant_values=True)  # outside the maze counts as solid
         vertical_faces = padded[1:-1, :-1] != padded[1:-1, 1:]  # (2R+1, 2C+2): block row, x edge
@@ -340,7 +315,7 @@ class _Workspace:
 
 
 class _Sensors:
-    """Per sensor of one ``MazeGrids.cast``: where it stands and what its rays first meet.
+    """Per sensor of one ``MazeGrids.cast_edges``: where it stands and what its rays first meet.
 
     Attributes:
         origin: (2, K) x, y (m).
@@ -399,7 +374,7 @@ def _code_offsets(width: int) -> np.ndarray:
 
 
 class _BandCrossings:
-    """The rays of one ``MazeGrids.cast`` not settled in their sensor's cell, and their crossings
+    """The rays of one ``MazeGrids.cast_edges`` not settled in their sensor's cell, and their crossings
     into wall bands.
 
     Along each axis a ray enters the wall band of grid line k (``k s -+ t/2``) at
@@ -407,7 +382,7 @@ class _BandCrossings:
     enters the block of band 2k along that axis and, across it, of the band the other coordinate
     lies in. The first solid block entered on either axis is the hit (x first on a tie), certain once
     no crossing not yet looked at lies nearer. The distances here are float32 (to about 1e-7 m),
-    enough to tell which face a ray meets (``MazeGrids.cast`` then measures the distance to it
+    enough to tell which face a ray meets (``MazeGrids.cast_edges`` then measures the distance to it
     exactly); every ray's are computed alike (from n, never from an earlier pass), so a ray's hit
     does not depend on the others cast with it.
 
