@@ -11,9 +11,9 @@ blocks sharing the block edges ``xs`` (2C+2,) and ``ys`` (2R+2,), metres. On the
   pass, in numpy arrays, until each has met a wall or passed ``max_range`` (``_BandCrossings``).
   Exact for the maze's axis-aligned thick walls, and cheap, since a ray in a maze meets a wall
   within few cells.
-* ``push_out``: robot discs pushed out of the solid blocks they overlap, along the
-  shortest way out, as ``World`` does with pymunk's contacts: a disc slides along a wall it drives
-  against and never passes through one (a step moves it much less than its radius).
+* ``slide``: a robot disc driven step by step and pushed out of the solid blocks it overlaps,
+  along the shortest way out, as ``World`` does with pymunk's contacts: a disc slides along a wall
+  it drives against and never passes through one (a step moves it much less than its radius).
 * ``MazeGrids.edge_bins``: where each beam landed, as a bin of ``spacing`` metres on a wall face, to
   count the wall surface seen.
 """
@@ -267,39 +267,44 @@ class MazeGrids:
         return bounds.reshape(4, count, -1)
 
 
-def push_out(position: np.ndarray, radius: float, boxes: np.ndarray, iterations: int = 3) -> np.ndarray:
-    """Move discs of ``radius`` (m) centred at ``position`` (2, E) (x, y; m; in place) out of the
-    ``boxes`` (4, E, B) they overlap (``MazeGrids.boxes_near``), the deepest overlap first; return
-    (E,) bool, whether each disc overlapped one. A disc that overlapped two boxes (a corner) takes
-    another pass; one that overlapped one is out of every box once pushed out of it, as it moves
-    much less than a corridor's free width (boxes across a corridor are that far apart)."""
-    touched = np.zeros(position.shape[1], dtype=bool)
-    low, high = boxes[:2], boxes[2:]  # (2, E, B) each: x, y
-    reach = radius * radius
-    discs = None  # those looked at in this pass (None: all)
-    point = position[:, :, None]
-    for _ in range(iterations):
-        gap = point - np.minimum(np.maximum(point, low), high)  # from each box's nearest point (inf: none)
-        squared = gap[0] * gap[0]
-        squared += gap[1] * gap[1]  # (E', B)
-        deepest = squared.min(axis=1)
-        overlap = deepest < reach
-        if not overlap.any():
-            break
-        if discs is None:
-            discs = np.arange(len(overlap))
-        if not overlap.all():
-            discs, gap, squared, deepest = discs[overlap], gap[:, overlap], squared[overlap], deepest[overlap]
-            low, high = low[:, overlap], high[:, overlap]
-        touched[discs] = True
-        distance = np.maximum(np.sqrt(deepest), 1e-12)
-        position[:, discs] += gap[:, np.arange(len(discs)), squared.argmin(axis=1)] * ((radius - distance) / distance)
-        corner = (squared < reach).sum(axis=1) > 1
-        if not corner.any():
-            break
-        discs, low, high = discs[corner], low[:, corner], high[:, corner]
-        point = position[:, discs, None]
-    return touched
+def slide(
+    x: float, y: float, moves: list[list[float]], radius: float, boxes: list[list[float]], iterations: int = 3
+) -> tuple[float, float, bool]:
+    """Drive a disc of ``radius`` (m) centred at (x, y) (m) by each of ``moves`` [(dx, dy), ...] (m)
+    in turn, pushing it after each out of the ``boxes`` [[xmin, ymin, xmax, ymax], ...] (m) it
+    overlaps (``MazeGrids.boxes_near``'s solid ones), as ``World`` does with pymunk's contacts;
+    return the final centre and whether it overlapped a box.
+
+    Each push goes along the shortest way out of the deepest overlap; a disc that overlapped two
+    boxes (a corner) takes another pass, up to ``iterations``; one that overlapped one is out of
+    every box once pushed out of it, as it moves much less than a corridor's free width (boxes
+    across a corridor are that far apart), so it slides along a wall it drives against and never
+    passes through one. Plain Python floats: a robot in contact has a few boxes near it, and
+    numpy's per-call cost would outweigh the arithmetic."""
+    reach, touched = radius * radius, False
+    for dx, dy in moves:
+        x += dx
+        y += dy
+        for _ in range(iterations):
+            deepest, overlapping, gap_x, gap_y = math.inf, 0, 0.0, 0.0
+            for xmin, ymin, xmax, ymax in boxes:  # the gap from each box's nearest point
+                gx = x - (xmin if x < xmin else xmax if x > xmax else x)
+                gy = y - (ymin if y < ymin else ymax if y > ymax else y)
+                squared = gx * gx + gy * gy
+                if squared < reach:
+                    overlapping += 1
+                if squared < deepest:
+                    deepest, gap_x, gap_y = squared, gx, gy
+            if not overlapping:
+                break
+            touched = True
+            distance = max(math.sqrt(deepest), 1e-12)
+            scale = (radius - distance) / distance
+            x += gap_x * scale
+            y += gap_y * scale
+            if overlapping == 1:
+                break
+    return x, y, touched
 
 
 class _Workspace:

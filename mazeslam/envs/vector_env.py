@@ -21,7 +21,7 @@ from gymnasium.utils import seeding
 from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space
 
-from mazeslam.envs.batched import MazeGrids, push_out
+from mazeslam.envs.batched import MazeGrids, slide
 from mazeslam.envs.drive_env import DriveEnv
 from mazeslam.envs.maze import Maze
 from mazeslam.envs.maze_env import WALL_SAMPLE_SPACING, choose_maze, draw_start_pose
@@ -277,15 +277,15 @@ class MazeVectorEnv(VectorEnv):
         touching = np.flatnonzero(overlaps.any(axis=1))
         position = path[:, :, -1].copy()
         touched = np.zeros(self.num_envs, dtype=bool)
-        if len(touching):  # step by step from the first overlap on, pushed out of the walls
-            first = int(overlaps[touching].argmax(axis=1).min())
-            near, moved = boxes[:, touching], path[:, touching, first].copy()
-            moves = np.stack([step_x[touching], step_y[touching]])  # (2, E', steps)
-            pushed = np.zeros(len(touching), dtype=bool)
-            for step in range(first, steps):
-                moved += moves[:, :, step]
-                pushed |= push_out(moved, robot.body_radius, near)
-            position[:, touching], touched[touching] = moved, pushed
+        if len(touching):  # step by step from each one's first overlap on, pushed out of the walls
+            firsts = overlaps[touching].argmax(axis=1).tolist()
+            starts = path[:, touching].transpose(1, 2, 0).tolist()  # (E', steps + 1, 2)
+            moves = np.stack([step_x[touching], step_y[touching]], axis=2).tolist()  # (E', steps, 2)
+            near = boxes[:, touching].transpose(1, 2, 0).tolist()  # (E', B, 4)
+            for k, env in enumerate(touching.tolist()):
+                first, solid = firsts[k], [box for box in near[k] if box[0] != np.inf]
+                x, y, touched[env] = slide(*starts[k][first], moves[k][first:], robot.body_radius, solid)
+                position[0, env], position[1, env] = x, y
         self.poses = np.column_stack([position.T, wrap_angle(headings[:, -1])])
         return touched
 
