@@ -284,7 +284,8 @@ class MazeVectorEnv(VectorEnv):
             near = boxes[:, touching].transpose(1, 2, 0).tolist()  # (E', B, 4)
             for k, env in enumerate(touching.tolist()):
                 first, solid = firsts[k], [box for box in near[k] if box[0] != np.inf]
-                x, y, touched[env] = slide(*starts[k][first], moves[k][first:], robot.body_radius, solid)
+                x, y = starts[k][first]
+                x, y, touched[env] = slide(x, y, moves[k][first:], robot.body_radius, solid)
                 position[0, env], position[1, env] = x, y
         self.poses = np.column_stack([position.T, wrap_angle(headings[:, -1])])
         return touched
