@@ -25,6 +25,7 @@ outer boundary must be closed. ``start`` is the start cell as ``row col`` (row 0
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -99,8 +100,8 @@ class Maze:
 
     def cell_of(self, x: float, y: float) -> tuple[int, int]:
         """The cell (row, col) containing world point (x, y), clipped to the maze."""
-        col = int(np.clip(np.floor(x / self.cell_size), 0, self.cols - 1))
-        row = int(np.clip(np.floor(y / self.cell_size), 0, self.rows - 1))
+        col = min(max(math.floor(x / self.cell_size), 0), self.cols - 1)
+        row = min(max(math.floor(y / self.cell_size), 0), self.rows - 1)
         return row, col
 
     def neighbours(self, row: int, col: int) -> list[tuple[int, int]]:

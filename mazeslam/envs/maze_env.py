@@ -104,6 +104,7 @@ class MazeEnv(DriveEnv):
         self._seen_count = 0
         self.visited = np.zeros((maze.rows, maze.cols), dtype=bool)
         self.visited[maze.cell_of(*self.start_pose[:2])] = True
+        self._visited_count = 1
         pose = self.simulated.pose
         self._see(pose)
         return self._observation(), self._info(pose, collision=False)
@@ -117,13 +118,14 @@ class MazeEnv(DriveEnv):
         cell = self.simulated.maze.cell_of(pose[0], pose[1])  # the episode's maze
         new_cell = not self.visited[cell]
         self.visited[cell] = True
+        self._visited_count += new_cell
         newly_seen = self._see(pose)
         reward = (
             self.wall_reward * newly_seen * WALL_SAMPLE_SPACING
             + self.cell_reward * new_cell
             - self.collision_penalty * collision
         )
-        terminated = bool(self.visited.all())
+        terminated = self._visited_count == self.visited.size
         truncated = self.max_steps is not None and self.steps >= self.max_steps
         if self.render_mode == "human":
             self.render()
@@ -155,7 +157,7 @@ class MazeEnv(DriveEnv):
         return {
             "pose": pose,
             "coverage": self._seen_count / len(self.seen),
-            "visited": float(self.visited.mean()),
+            "visited": self._visited_count / self.visited.size,
             "collision": bool(collision),
             "time": self.time,
         }

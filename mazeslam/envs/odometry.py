@@ -76,13 +76,20 @@ class WheelEncoders:
 
     def drive(self, left_speed: float, right_speed: float, dt: float) -> tuple[float, float]:
         """Command wheel speeds (m/s) for ``dt`` s; returns the wheels' true ground travel (m, m)."""
+        ((left, right),) = self.drive_steps(left_speed, right_speed, dt, 1)
+        return left, right
+
+    def drive_steps(self, left_speed: float, right_speed: float, dt: float, steps: int) -> list[list[float]]:
+        """Command wheel speeds (m/s) for ``steps`` physics steps of ``dt`` s each; returns each
+        step's true ground travel of the wheels, [[left m, right m], ...]: the same numbers as
+        ``steps`` calls of ``drive`` (the slip of all the steps drawn at once, in the same order)."""
         commanded = np.array([left_speed, right_speed]) * dt
-        self._commanded += commanded
+        for _ in range(steps):
+            self._commanded += commanded
         p = self.params
         scale = 1.0 + np.array([p.left_scale_error, p.right_scale_error])
-        slip = self.rng.normal(0.0, 1.0, 2) * p.slip_std * np.sqrt(np.abs(commanded)) if p.slip_std else 0.0
-        left, right = commanded * scale + slip
-        return float(left), float(right)
+        slip = self.rng.normal(0.0, 1.0, (steps, 2)) * p.slip_std * np.sqrt(np.abs(commanded)) if p.slip_std else 0.0
+        return np.broadcast_to(commanded * scale + slip, (steps, 2)).tolist()
 
     @property
     def steps(self) -> np.ndarray:

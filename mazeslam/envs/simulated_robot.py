@@ -47,14 +47,14 @@ class SimulatedRobot(Robot):
 
     def set_wheel_speeds(self, left: float, right: float) -> None:
         top = self.config.robot.max_wheel_speed
-        self.speeds = (float(np.clip(left, -top, top)), float(np.clip(right, -top, top)))
+        self.speeds = (min(max(float(left), -top), top), min(max(float(right), -top), top))
 
     def advance(self, seconds: float) -> bool:
         """Let ``seconds`` of physics pass at the current wheel speeds; return whether the robot
         touched a wall meanwhile."""
         touched = False
-        for _ in range(max(0, round(seconds / self._dt))):
-            touched |= self.world.step(*self.encoders.drive(*self.speeds, self._dt), self._dt)
+        for left, right in self.encoders.drive_steps(*self.speeds, self._dt, max(0, round(seconds / self._dt))):
+            touched |= self.world.step(left, right, self._dt)
             self.time += self._dt
         return touched
 

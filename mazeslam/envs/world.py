@@ -16,7 +16,7 @@ import numpy as np
 import pymunk
 
 from mazeslam.config import require
-from mazeslam.geometry import wrap_angle
+from mazeslam.geometry import TWO_PI
 
 
 @dataclass(frozen=True)
@@ -82,7 +82,7 @@ class World:
     def pose(self) -> np.ndarray:
         """True pose (x, y, theta) of the wheel-axle centre, world frame."""
         x, y = self.body.position
-        return np.array([x, y, wrap_angle(self.body.angle)])
+        return np.array([x, y, math.pi - (math.pi - self.body.angle) % TWO_PI])  # wrap_angle, for a float
 
     def step(self, left_travel: float, right_travel: float, dt: float) -> bool:
         """Advance ``dt`` seconds with each wheel's ground contact travelling the given metres.
