@@ -320,6 +320,16 @@ def corners(
         click.echo(f"json: {report.write_json(json_path)}")
 
 
+#: What ``slam``'s side process loads while the filter runs: what draws ``slam.png`` and exports the map.
+FIGURE_MODULES = (
+    "matplotlib.figure",
+    "matplotlib.backends.backend_agg",
+    "matplotlib.image",
+    "mazeslam.evaluation.slam_report",
+    "mazeslam.evaluation.map_export",
+)
+
+
 @main.command()
 @click.argument("log_file", type=click.Path(exists=True, dir_okay=False, path_type=Path))
 @click.option(
@@ -385,11 +395,10 @@ def slam(
     quiet,
 ):
     """Run FastSLAM on a course log: trajectory, map, the exercise's figure, and errors when truth exists."""
-    from mazeslam.slam_command import run_slam_command
+    from mazeslam.run_folders import SLAM_FILES, clear_outputs, default_out_dir
+    from mazeslam.side_process import SideProcess
 
     overrides = _geometry_overrides(first_beam_angle, beam_direction, mount_x)
-    from mazeslam.run_folders import SLAM_FILES, clear_outputs, default_out_dir
-
     out_dir = prepare_output_folder(out_dir or default_out_dir(log_file, "slam"))
     clear_outputs(out_dir, SLAM_FILES)
     filter_changes = {
@@ -398,18 +407,23 @@ def slam(
         "association": association,
         "version": int(version) if version else None,
     }
-    lines = run_slam_command(
-        log_file,
-        config_path,
-        out_dir,
-        filter_changes,
-        overrides,
-        animate,
-        not quiet,
-        live=live,
-        echo=lambda message: click.echo(message, err=True),
-        map_kind=map_kind,
-    )
+    # Started first, so that matplotlib loads on the other core while this one loads the filter and runs it.
+    with SideProcess(FIGURE_MODULES) as side:
+        from mazeslam.slam_command import run_slam_command
+
+        lines = run_slam_command(
+            log_file,
+            config_path,
+            out_dir,
+            filter_changes,
+            overrides,
+            animate,
+            not quiet,
+            live=live,
+            echo=lambda message: click.echo(message, err=True),
+            map_kind=map_kind,
+            side=side,
+        )
     click.echo("\n".join(lines))
     click.echo(f"results in {out_dir}")
 

@@ -16,6 +16,7 @@ from mazeslam.evaluation.scoring import RPE_DISTANCE, score_run
 from mazeslam.evaluation.sharpness import paths_sharpness, sharpness_lines
 from mazeslam.filters.corners import CornerExtractor
 from mazeslam.loaded_run import LoadedRun, load_run
+from mazeslam.side_process import SideProcess
 from mazeslam.slam import MapKind, SlamConfig, SlamResult, load_slam_config, slam_on_run
 
 #: About how many frames ``--animate`` draws, whatever the log's length.
@@ -33,13 +34,16 @@ def run_slam_command(
     live=False,
     echo=None,
     map_kind: str | None = None,
+    side: SideProcess | None = None,
 ) -> list[str]:
     """Run, write ``out_dir``/{trajectory.csv, best_trajectory.csv, map.json, slam.png, occupancy.pgm/.yaml/.png,
     landmarks.csv[, slam.gif]};
     return the lines to print. ``filter_changes`` replace ``[fastslam]`` settings and ``sensor``
     the ``[sensor]`` ones (None values: keep the config's). ``live``: draw the filter as it runs
     (``mazeslam.live``; its note when there is no window goes to ``echo`` at once, and to the lines).
-    ``map_kind`` replaces ``[map] kind``; the particle count and seed go to the filter that runs."""
+    ``map_kind`` replaces ``[map] kind``; the particle count and seed go to the filter that runs.
+    ``side``: a ``SideProcess`` that has loaded matplotlib draws ``slam.png`` while this process scores
+    the run and writes the rest (without one, the figure is drawn here)."""
     config = load_slam_config(config_path)
     filter_changes = filter_changes or {}
     config = dataclasses.replace(
@@ -55,9 +59,9 @@ def run_slam_command(
     if config.map.kind == MapKind.GRID:
         from mazeslam.grid_command import run_grid_command
 
-        if animate or live:
-            notes.append("--animate and --live draw corner FastSLAM only; the grid filter's map is in occupancy.png")
-        lines = run_grid_command(run, config, Path(out_dir), progress)
+        if live:
+            notes.append("--live draws corner FastSLAM only; the grid filter's map is in occupancy.png")
+        lines = run_grid_command(run, config, Path(out_dir), progress, animate)
         return lines[:1] + notes + lines[1:]
     updates = int(run.log.is_scan.sum() + run.log.is_landmark.sum())
     every = max(1, updates // ANIMATION_FRAMES) if animate else 0  # frames for the GIF, at most ~ANIMATION_FRAMES
@@ -79,6 +83,20 @@ def run_slam_command(
             f"Live view: {view.frames} frames drawn in {view.drawing_seconds:.1f} s"
             + ("" if view.window else " (off-screen: no display)")
         )
+    span = config.corners.min_range, config.corners.max_range
+    points = slam_report.scan_points_world(run.log, result.mean_poses, run.geometry, *span)
+    truth_label = "reference path" if run.truth_is_reference else "true path"
+    figure = slam_report.SlamFigure.of(
+        result,
+        points,
+        truth=run.truth,
+        walls=run.walls,
+        true_landmarks=run.true_corners if run.world is not None else None,
+        title=f"{run.path.name}: FastSLAM, {config.fastslam.NPARTICLES} particles",
+        truth_label=truth_label,
+    )
+    side = side if side is not None else SideProcess.inline()
+    side.start(slam_report.draw_and_export, out_dir, figure, run.log, run.geometry, *span)
     score = score_run(run, result, config.evaluation.match_radius)
     nis = nis_summary(result.nis)
     line_numbers = run.log.line_numbers
@@ -95,7 +113,6 @@ def run_slam_command(
     }
     lines += _uncertainty_lines(nis, score.nees_summary if score is not None else None)
     if run.log.n_beams:
-        span = config.corners.min_range, config.corners.max_range
         placed_by = {"mean path": result.mean_poses, "best particle": result.best_poses}
         sharpness = paths_sharpness(run, placed_by, config.odometry.jump_tolerance, *span)
         lines += sharpness_lines(sharpness, *span)
@@ -117,34 +134,7 @@ def run_slam_command(
     if run.truth is not None:
         paths["truth_tum"] = Path(out_dir) / "truth.tum"
         sidecars.write_tum(paths["truth_tum"], run.log.times, run.truth)
-    points = slam_report.scan_points_world(
-        run.log, result.mean_poses, run.geometry, config.corners.min_range, config.corners.max_range
-    )
-    truth_label = "reference path" if run.truth_is_reference else "true path"
-    paths["figure"] = slam_report.plot_slam(
-        Path(out_dir) / "slam.png",
-        result,
-        points,
-        run.truth,
-        run.walls,
-        title=f"{run.path.name}: FastSLAM, {config.fastslam.NPARTICLES} particles",
-        true_landmarks=run.true_corners if run.world is not None else None,
-        truth_label=truth_label,
-    )
-    from mazeslam.evaluation.map_export import export_map
-
-    paths.update(
-        export_map(
-            out_dir,
-            run.log,
-            result.mean_poses,
-            run.geometry,
-            result.landmarks,
-            result.landmark_covariances,
-            config.corners.min_range,
-            config.corners.max_range,
-        )
-    )
+    paths.update(side.result())  # slam.png and the map export
     if animate:
         from mazeslam.evaluation.slam_view import scan_source
 

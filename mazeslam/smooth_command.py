@@ -24,7 +24,6 @@ import time
 from dataclasses import dataclass
 from pathlib import Path
 
-import matplotlib.pyplot as plt
 import numpy as np
 
 from mazeslam import sidecars
@@ -38,7 +37,6 @@ from mazeslam.evaluation.metrics import (
     map_error,
     normalized_estimation_error,
 )
-from mazeslam.evaluation.plots import save_figure
 from mazeslam.evaluation.scoring import DEAD_RECKONING, RunScore, error_table
 from mazeslam.evaluation.slam_report import _ellipse, scan_points_world
 from mazeslam.filters.corners import CornerExtractor
@@ -273,6 +271,10 @@ def _write_outputs(out_dir: Path, run: LoadedRun, config: SlamConfig, smoothed: 
 def plot_smoothed(path, run: LoadedRun, smoothed: Smoothed, points: np.ndarray) -> Path:
     """The slam figure for the optimum: its map with 2-sigma ellipses, scan points placed by its poses,
     its path beside dead reckoning; with the sidecars, the walls, true path and true corners."""
+    import matplotlib.pyplot as plt  # here: the slam command imports this module, and draws without pyplot
+
+    from mazeslam.evaluation.plots import save_figure
+
     fig, ax = plt.subplots(figsize=(9, 7))
     for x1, y1, x2, y2 in run.walls if run.walls is not None else []:
         ax.plot([x1, x2], [y1, y2], color="0.6", linewidth=1.0)

@@ -92,7 +92,9 @@ def test_slam_figure_has_its_legend_and_labels_inside(short_run, monkeypatch):
             seen[artist] = extent.x0 >= box.x0 - 1 and extent.x1 <= box.x1 + 1 and extent.y0 >= box.y0 - 1
 
     monkeypatch.setattr(matplotlib.figure.Figure, "savefig", savefig)
-    fig, ax = matplotlib.pyplot.subplots(figsize=(6, 5))
+    import matplotlib.pyplot as plt  # plots.py draws without pyplot; a pyplot figure is checked here
+
+    fig, ax = plt.subplots(figsize=(6, 5))
     ax.plot([0, 1], [0, 1], label="a line with a long legend entry that would stick out")
     ax.set_xlabel("x [m]")
     ax.set_ylabel("y [m]")

@@ -8,12 +8,12 @@ each, not one artist per item, so a figure of thousands of scan points draws in 
 
 from __future__ import annotations
 
+import sys
 from pathlib import Path
 
 import matplotlib
 
-matplotlib.use("Agg")  # draw to files; no display needed
-import matplotlib.pyplot as plt  # noqa: E402
+matplotlib.use("Agg")  # draw to files; no display needed (pyplot itself loads only where a figure is made with it)
 import numpy as np  # noqa: E402
 from matplotlib.collections import EllipseCollection, LineCollection  # noqa: E402
 
@@ -34,6 +34,8 @@ def plot_run(
         truth: (R, 3) true poses.
         estimates: name -> (R, 3) estimated poses, e.g. ``{"dead reckoning": ...}``.
     """
+    import matplotlib.pyplot as plt
+
     fig, ax = plt.subplots(figsize=(8, 7.5))
     draw_walls(ax, walls, colour="0.25", linewidth=1.5)
     if len(corners):
@@ -91,7 +93,8 @@ def draw_ellipses(
 
 def save_figure(fig, ax, path: str | Path, title: str = "", legend_columns: int = 4, dpi: int = 120) -> Path:
     """Title ``ax``, put its legend below the plot, lay ``fig`` out (constrained layout, so neither
-    the legend nor an axis label is cut off), save it to ``path`` (folders made) and close it."""
+    the legend nor an axis label is cut off), save it to ``path`` (folders made) and close it (a
+    pyplot figure; one made as ``matplotlib.figure.Figure`` is not pyplot's to close)."""
     ax.set_title(title)
     fig.set_layout_engine("constrained")
     handles, labels = ax.get_legend_handles_labels()
@@ -100,5 +103,7 @@ def save_figure(fig, ax, path: str | Path, title: str = "", legend_columns: int 
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     fig.savefig(path, dpi=dpi)
-    plt.close(fig)
+    pyplot = sys.modules.get("matplotlib.pyplot")
+    if pyplot is not None:
+        pyplot.close(fig)
     return path

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -12,12 +13,12 @@ from mazeslam import log, sidecars
 from mazeslam.beams import BeamGeometry
 from mazeslam.config import jsonable
 from mazeslam.geometry import transform_points
-from mazeslam.slam import SlamResult
 
 if TYPE_CHECKING:
     from matplotlib.patches import Ellipse
 
     from mazeslam.evaluation.slam_view import ScanSource
+    from mazeslam.slam import SlamResult
 
 # matplotlib (0.5 s) and the figure modules load when a figure is first drawn, not with the module.
 
@@ -60,6 +61,32 @@ def scan_points_world(
     return np.concatenate(chunks) if chunks else np.empty((0, 2))
 
 
+@dataclass
+class SlamFigure:
+    """What the exercise's figure shows, as plain arrays (world frame, metres; picklable, so that
+    another process can draw it): the mean path (R, >=2), the particles' poses (P, >=2), the best
+    particle's landmarks (L, 2) and their covariances (L, 2, 2), scan points (Q, 2); with truth, the
+    true path (R, >=2), walls (W, 4) and true landmarks (K, 2)."""
+
+    mean_poses: np.ndarray
+    particles: np.ndarray
+    landmarks: np.ndarray
+    landmark_covariances: np.ndarray
+    points: np.ndarray
+    truth: np.ndarray | None = None
+    walls: np.ndarray | None = None
+    true_landmarks: np.ndarray | None = None
+    title: str = ""
+    truth_label: str = "true path"
+
+    @classmethod
+    def of(cls, result: SlamResult, points: np.ndarray, **rest) -> SlamFigure:
+        """The figure of a run: its mean path, final particles and best particle's map."""
+        return cls(
+            result.mean_poses, result.filter.poses, result.landmarks, result.landmark_covariances, points, **rest
+        )
+
+
 def plot_slam(
     path,
     result: SlamResult,
@@ -70,21 +97,31 @@ def plot_slam(
     true_landmarks: np.ndarray | None = None,
     truth_label: str = "true path",
 ) -> Path:
+    """The exercise's figure of ``result`` (``draw_slam_figure``)."""
+    figure = SlamFigure.of(
+        result, points, truth=truth, walls=walls, true_landmarks=true_landmarks, title=title, truth_label=truth_label
+    )
+    return draw_slam_figure(path, figure)
+
+
+def draw_slam_figure(path, figure: SlamFigure) -> Path:
     """The exercise's figure: best particle's map with 2-sigma ellipses, particles in red, scan
     points in black, the estimated path; with truth, the true path (``truth_label``: a reference
-    path is not truth), walls and landmarks too."""
-    # plots selects the file-only Agg backend when first imported; no switch here, at call time,
-    # where it would turn off a notebook's inline figures.
-    import matplotlib.pyplot as plt
+    path is not truth), walls and landmarks too. Drawn on a ``matplotlib.figure.Figure`` (no pyplot:
+    no window, and a notebook's backend is left alone), one artist per kind."""
+    from matplotlib.figure import Figure
 
     from mazeslam.evaluation import plots
 
-    fig, ax = plt.subplots(figsize=(9, 7))
-    plots.draw_walls(ax, walls)
+    fig = Figure(figsize=(9, 7))
+    ax = fig.add_subplot()
+    plots.draw_walls(ax, figure.walls)
+    points = figure.points
     if len(points):  # one rasterised artist: thousands of points cost one image, not thousands of marks
         ax.plot(*points.T, ".", color="black", markersize=0.8, alpha=0.4, label="scan points", rasterized=True)
+    truth, true_landmarks = figure.truth, figure.true_landmarks
     if truth is not None:
-        ax.plot(truth[:, 0], truth[:, 1], color="tab:green", linewidth=1.2, label=truth_label)
+        ax.plot(truth[:, 0], truth[:, 1], color="tab:green", linewidth=1.2, label=figure.truth_label)
     if true_landmarks is not None and len(true_landmarks):
         ax.plot(
             true_landmarks[:, 0],
@@ -95,23 +132,33 @@ def plot_slam(
             markerfacecolor="none",
             label="true landmarks",
         )
-    ax.plot(result.mean_poses[:, 0], result.mean_poses[:, 1], color="tab:blue", linewidth=1.2, label="FastSLAM path")
-    particles = result.filter.poses
-    ax.plot(particles[:, 0], particles[:, 1], ".", color="red", markersize=3, label="particles")
-    plots.draw_ellipses(ax, result.landmarks, result.landmark_covariances)
-    if len(result.landmarks):
-        ax.plot(
-            result.landmarks[:, 0],
-            result.landmarks[:, 1],
-            "+",
-            color="tab:purple",
-            markersize=8,
-            label="landmarks (2 sigma)",
-        )
+    mean = figure.mean_poses
+    ax.plot(mean[:, 0], mean[:, 1], color="tab:blue", linewidth=1.2, label="FastSLAM path")
+    ax.plot(figure.particles[:, 0], figure.particles[:, 1], ".", color="red", markersize=3, label="particles")
+    landmarks = figure.landmarks
+    plots.draw_ellipses(ax, landmarks, figure.landmark_covariances)
+    if len(landmarks):
+        ax.plot(landmarks[:, 0], landmarks[:, 1], "+", color="tab:purple", markersize=8, label="landmarks (2 sigma)")
     ax.set_aspect("equal")
     ax.set_xlabel("x [m]")
     ax.set_ylabel("y [m]")
-    return plots.save_figure(fig, ax, path, title)
+    return plots.save_figure(fig, ax, path, figure.title)
+
+
+def draw_and_export(
+    out_dir, figure: SlamFigure, course_log: log.CourseLog, geometry: BeamGeometry, min_range: float, max_range: float
+) -> dict[str, Path]:
+    """The outputs that need matplotlib, in one call (``mazeslam slam`` makes it in a side process):
+    ``slam.png`` (``draw_slam_figure``) and the map export (``map_export.export_map``: occupancy
+    grid along the figure's mean path, scan returns within [min_range, max_range] m, and the
+    figure's landmarks). Returns the paths by name, the figure's first."""
+    from mazeslam.evaluation.map_export import export_map
+
+    out_dir = Path(out_dir)
+    paths = {"figure": draw_slam_figure(out_dir / "slam.png", figure)}
+    mean, landmarks, covariances = figure.mean_poses, figure.landmarks, figure.landmark_covariances
+    paths.update(export_map(out_dir, course_log, mean, geometry, landmarks, covariances, min_range, max_range))
+    return paths
 
 
 def _ellipse(mean, covariance, sigmas: float = 2.0) -> Ellipse:

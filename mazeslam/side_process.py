@@ -1,0 +1,125 @@
+"""A second process that loads slow modules while this one works, then runs one call for it.
+
+``mazeslam slam`` starts one before the filter: it imports matplotlib (about 0.4 s) on the other
+core while the filter runs, and draws ``slam.png`` while this process scores the run and writes the
+other outputs. It is forked (Linux), so it starts with everything already imported here; where fork
+is not the platform's way (macOS, Windows), or the process cannot start, calls run in this process
+instead, as they do when it has died. An error in the call is raised here, with the other process's
+traceback as its cause. The process ignores Ctrl-C (this one handles it) and ends with this one.
+"""
+
+from __future__ import annotations
+
+import importlib
+import multiprocessing
+import signal
+import sys
+import traceback
+from collections.abc import Callable, Sequence
+from multiprocessing.connection import Connection
+from typing import Any
+
+
+class RemoteTraceback(Exception):
+    """The traceback of an error raised in the side process (the cause of the error raised here)."""
+
+
+class SideProcess:
+    """One forked process that imports ``modules`` at once, then runs the calls given to ``start``,
+    one at a time. Use as a context manager (the process ends on leaving it)."""
+
+    def __init__(self, modules: Sequence[str] = (), fork: bool = True):
+        self._connection: Connection | None = None
+        self._process = None
+        self._pending: tuple[Callable, tuple, dict] | None = None
+        if not fork or not sys.platform.startswith("linux"):
+            return
+        try:
+            context = multiprocessing.get_context("fork")
+            ours, theirs = context.Pipe()
+            process = context.Process(target=_serve, args=(theirs, tuple(modules)), daemon=True)
+            process.start()
+        except (OSError, ValueError):  # no fork, no pipes, no processes left: run calls here
+            return
+        theirs.close()
+        self._connection, self._process = ours, process
+
+    @classmethod
+    def inline(cls) -> SideProcess:
+        """No other process: each call runs here, in ``result``."""
+        return cls(fork=False)
+
+    @property
+    def running(self) -> bool:
+        """Whether calls go to the other process (else they run here)."""
+        return self._process is not None
+
+    def start(self, function: Callable, *args: Any, **kwargs: Any) -> None:
+        """Hand ``function(*args, **kwargs)`` (picklable, module-level) to the other process; ``result``
+        returns its value. Without the other process, nothing runs until ``result``."""
+        if self._pending is not None:
+            raise RuntimeError("SideProcess.start: the last call's result was not collected")
+        self._pending = function, args, kwargs
+        if self._connection is not None:
+            try:
+                self._connection.send(self._pending)
+            except (OSError, ValueError):  # it has died: the call runs here, in result()
+                self._stop()
+
+    def result(self) -> Any:
+        """The value of the call given to ``start`` (run here when the other process is not there)."""
+        if self._pending is None:
+            raise RuntimeError("SideProcess.result: no call was started")
+        function, args, kwargs = self._pending
+        self._pending = None
+        if self._connection is None:
+            return function(*args, **kwargs)
+        try:
+            failed, value = self._connection.recv()
+        except (EOFError, OSError):  # it died mid-call (killed, out of memory): do it here
+            self._stop()
+            return function(*args, **kwargs)
+        if failed:
+            error, remote = value
+            raise error from RemoteTraceback(remote)
+        return value
+
+    def _stop(self) -> None:
+        if self._connection is not None:
+            self._connection.close()
+            self._connection = None
+        if self._process is not None:
+            if self._process.is_alive():
+                self._process.terminate()
+            self._process.join()
+            self._process = None
+
+    def __enter__(self) -> SideProcess:
+        return self
+
+    def __exit__(self, *exc_info) -> None:
+        self._stop()
+
+
+def _serve(connection: Connection, modules: tuple[str, ...]) -> None:
+    """The side process: import ``modules``, then run each call received until the pipe closes."""
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    for name in modules:
+        try:
+            importlib.import_module(name)
+        except ImportError:  # a call that needs it fails on it, and its error is raised in the caller
+            pass
+    while True:
+        try:
+            function, args, kwargs = connection.recv()
+        except (EOFError, OSError):
+            return
+        try:
+            reply: tuple[bool, Any] = (False, function(*args, **kwargs))
+        except Exception as error:  # handed back to the caller, raised there
+            reply = (True, (error, traceback.format_exc()))
+        try:
+            connection.send(reply)
+        except Exception as error:  # the value or the error would not pickle: say so
+            message = f"{type(error).__name__}: {error}"
+            connection.send((True, (RuntimeError(f"side process: cannot hand back the result: {message}"), "")))
