@@ -47,6 +47,8 @@ class SlamResult:
         pose_covariances: (R, 3, 3) the particle cloud's covariance after each record.
         laser_odometry: the scan-to-scan motion the filter moved by, when it used laser odometry
             (records between scans then keep the previous scan's pose).
+        observation_kinds: per report, the kind of each of its observations (the corner
+            extractor's ``corner``, ``wall_end``, ...; ``landmark`` for landmark records).
     """
 
     times: np.ndarray
@@ -62,11 +64,21 @@ class SlamResult:
     snapshots: list = field(default_factory=list)
     dropped_odometry: list = field(default_factory=list)
     laser_odometry: LaserOdometry | None = None
+    observation_kinds: list[list[str]] = field(default_factory=list)
 
     @property
     def nis(self) -> np.ndarray:
         """(A,) the normalised innovation squared of every associated observation of the run."""
         return np.concatenate([report.nis for report in self.reports]) if self.reports else np.empty(0)
+
+    def nis_by_kind(self) -> dict[str, np.ndarray]:
+        """The run's NIS values (``nis``) grouped by the kind of observation they belong to: which
+        part of the observation model is too wide (NIS well under 2) or too narrow (well over)."""
+        groups: dict[str, list[float]] = {}
+        for report, kinds in zip(self.reports, self.observation_kinds):
+            for value, index in zip(report.nis, report.nis_observations):
+                groups.setdefault(kinds[index], []).append(float(value))
+        return {kind: np.asarray(values) for kind, values in groups.items()}
 
     @property
     def resampled_fraction(self) -> float:
@@ -108,6 +120,7 @@ def run_fastslam(
     mean_poses, best_poses, step_seconds = np.empty((count, 3)), np.empty((count, 3)), np.empty(count)
     pose_covariances = np.empty((count, 3, 3))
     reports, snapshots, dropped = [], [], []
+    observation_kinds: list[list[str]] = []
     records = list(course_log.records())
     laser_increments = dict(zip(laser.scan_records, laser.increments)) if laser is not None else {}
     bar = tqdm(total=count, desc="FastSLAM", unit="record", disable=not progress)
@@ -132,7 +145,7 @@ def run_fastslam(
                     slam.predict_relative(laser_increments[record.index])
                 done = [record]
                 assert extractor is not None  # a log with scan records has beams
-                z, covariances, facings = _scan_observations(extractor, record)
+                z, covariances, facings, kinds = _scan_observations(extractor, record)
                 ids = None
                 if identify is not None:
                     ids = identify(record.index, z)
@@ -141,6 +154,8 @@ def run_fastslam(
                 done = list(group)
                 z = np.array([[r.range, r.bearing] for r in group])
                 covariances, ids, facings = None, np.array([r.landmark for r in group]), None
+                kinds = ["landmark"] * len(group)
+            observation_kinds.append(kinds)
             reports.append(
                 slam.update(z, covariances, ids if params.association == Association.KNOWN else None, facings)
             )
@@ -172,13 +187,16 @@ def run_fastslam(
         snapshots=snapshots,
         dropped_odometry=dropped,
         laser_odometry=laser,
+        observation_kinds=observation_kinds,
     )
 
 
 def _scan_observations(extractor: CornerExtractor, record: log.ScanRecord):
-    """Corner observations of one scan: (K, 2) range/bearing, (K, 2, 2) covariances, (K,) facings."""
+    """Corner observations of one scan: (K, 2) range/bearing, (K, 2, 2) covariances, (K,) facings
+    and their K kinds."""
     features = extractor.extract(record.ranges)
-    return features.observation_array(), features.observation_covariances(), features.observation_facings()
+    kinds = [observation.kind for observation in features.observations]
+    return features.observation_array(), features.observation_covariances(), features.observation_facings(), kinds
 
 
 def _same_time_landmarks(records: list, position: int) -> list[log.LandmarkRecord]:

@@ -94,3 +94,49 @@ def test_the_slam_command_writes_strict_json_and_reports_consistency(default_run
     assert document["nis"]["count"] > 0 and 0 <= document["nees"]["inside_95"] <= 1
     _, _, covariances = sidecars.read_trajectory(tmp_path / "out" / "trajectory.csv")
     assert np.all(np.linalg.eigvalsh(covariances[1:]) >= -1e-12)
+
+
+def test_map_orientation_spread_recovers_turned_maps():
+    from mazeslam.evaluation.consistency import map_orientation_spread
+
+    square = np.array([[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]])
+    centre = square.mean(axis=0)
+
+    def turned(angle, shift):
+        c, s = math.cos(angle), math.sin(angle)
+        return (square - centre) @ np.array([[c, s], [-s, c]]) + centre + shift
+
+    # Three maps turned by -a, 0, +a (and shifted, which does not count), equal weights: sd = a sqrt(2/3).
+    a = 0.02
+    means = np.stack([turned(-a, [0.1, 0.0]), turned(0.0, [0.0, 0.0]), turned(a, [0.0, -0.2])])
+    exists = np.ones((3, 4), dtype=bool)
+    weights = np.full(3, 1 / 3)
+    assert map_orientation_spread(means, exists, weights) == pytest.approx(a * math.sqrt(2 / 3), rel=1e-3)
+    # One ancestor (identical maps): no spread; a slot some particle lacks is left out.
+    same = np.stack([square] * 3)
+    extra = np.concatenate([same, np.full((3, 1, 2), 5.0)], axis=1)
+    holds = np.concatenate([exists, np.array([[True], [False], [True]])], axis=1)
+    assert map_orientation_spread(extra, holds, weights) == pytest.approx(0.0, abs=1e-12)
+    assert math.isnan(map_orientation_spread(same[:, :1], exists[:, :1], weights))
+
+
+def test_nis_is_grouped_by_the_kind_of_observation(default_run):
+    from mazeslam.loaded_run import load_run
+    from mazeslam.slam import SlamConfig, slam_on_run
+
+    run = load_run(default_run.log_path)
+    result = slam_on_run(run, SlamConfig(), progress=False)
+    groups = result.nis_by_kind()
+    # Every NIS value lands in exactly one group, and the kinds are the corner extractor's fixed ones.
+    assert sum(len(values) for values in groups.values()) == len(result.nis)
+    assert set(groups) <= {"corner", "wall_end"} and len(groups["corner"]) > 0
+    np.testing.assert_allclose(np.sort(np.concatenate(list(groups.values()))), np.sort(result.nis))
+
+
+def test_nis_indexes_name_the_observation_they_belong_to():
+    slam = FastSLAM(EXACT)
+    slam.update(np.array([[1.0, 0.0]]))
+    # A new observation first (no landmark yet), then the known one: only index 1 has a NIS.
+    report = slam.update(np.array([[3.0, 1.5], [1.02, 0.01]]))
+    assert report.nis_observations.tolist() == [1]
+    assert report.nis == pytest.approx([0.02**2 / 2e-4 + 0.01**2 / 8e-4])

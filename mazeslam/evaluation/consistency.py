@@ -50,3 +50,32 @@ def nees_summary(nees: np.ndarray) -> dict:
 def nis_summary(nis: np.ndarray) -> dict:
     """``summarise`` of per-observation NIS (2 degrees of freedom)."""
     return summarise(nis, OBSERVATION_BOUND_95)
+
+
+def map_orientation_spread(means: np.ndarray, exists: np.ndarray, weights: np.ndarray) -> float:
+    """How far the particles' maps disagree in orientation: the weighted standard deviation (rad)
+    over particles of the angle each particle's map is turned by against the weighted-mean map.
+
+    A particle filter carries the map frame's uncertainty in the world (how far all its landmarks
+    may be turned together, since the start) only in the diversity of its particles' maps: once
+    resampling has left the particles one common ancestor, this is about 0 while the map as a whole
+    may still be turned against the truth, and the pose covariance no longer covers that error
+    (Bailey et al., "Consistency of the FastSLAM algorithm", ICRA 2006).
+
+    Args:
+        means: (P, M, 2) every particle's landmark positions (m, world frame).
+        exists: (P, M) the slot holds a landmark; only the slots every particle holds are compared.
+        weights: (P,) normalised particle weights.
+    Returns NaN when fewer than two slots are held by every particle. The angle of each particle is
+    the 2-D Procrustes rotation of its landmarks about their centroid onto the mean map's.
+    """
+    common = np.flatnonzero(exists.all(axis=0))
+    if len(common) < 2:
+        return float("nan")
+    spread = means[:, common] - means[:, common].mean(axis=1, keepdims=True)  # (P, C, 2) about each centroid
+    reference = np.einsum("p,pcj->cj", weights, spread)  # (C, 2)
+    cross = spread[..., 1] @ reference[:, 0] - spread[..., 0] @ reference[:, 1]  # (P,)
+    dot = spread[..., 0] @ reference[:, 0] + spread[..., 1] @ reference[:, 1]
+    angles = np.arctan2(cross, dot)
+    mean = np.average(angles, weights=weights)
+    return float(np.sqrt(np.average((angles - mean) ** 2, weights=weights)))

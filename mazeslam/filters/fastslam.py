@@ -192,6 +192,8 @@ class UpdateReport:
     """(A,) normalised innovation squared of each associated observation (2 degrees of freedom):
     the squared Mahalanobis distance of its innovation under the predictive covariance the weights
     use, averaged over the particles that associated it with their weights before the scan."""
+    nis_observations: np.ndarray = field(default_factory=lambda: np.empty(0, dtype=np.int64))
+    """(A,) the index in the scan's observations of each ``nis`` value."""
 
 
 @dataclass
@@ -490,7 +492,7 @@ class FastSLAM:
             self.poses, self.pose_covariances, assigned, observations, self.means, self.covariances, noise, self.rng
         )
         likelihood = joint if joint is not None else _associated_terms(model, assigned)
-        report.nis = _normalised_innovations(likelihood[0], assigned, self.weights())
+        report.nis, report.nis_observations = _normalised_innovations(likelihood[0], assigned, self.weights())
         # 3. Landmarks and weights.
         if count:
             matched_now = np.zeros_like(self.exists)
@@ -700,13 +702,17 @@ def _associated_terms(model: MeasurementModel, assigned: np.ndarray) -> tuple[np
     return distance2, determinant
 
 
-def _normalised_innovations(distance2: np.ndarray, assigned: np.ndarray, weights: np.ndarray) -> np.ndarray:
-    """NIS (A,) of the observations that most of the weight associates: for observation k, the
-    weight-averaged squared Mahalanobis distance ``distance2`` (P, K) over the particles whose
-    ``assigned`` (P, K) slot is not -1, with their normalised ``weights`` (P,) before the scan."""
-    values = []
+def _normalised_innovations(
+    distance2: np.ndarray, assigned: np.ndarray, weights: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """NIS (A,) of the observations that most of the weight associates, and their indexes (A,)
+    among the scan's observations: for observation k, the weight-averaged squared Mahalanobis
+    distance ``distance2`` (P, K) over the particles whose ``assigned`` (P, K) slot is not -1, with
+    their normalised ``weights`` (P,) before the scan."""
+    values, indexes = [], []
     for k in range(assigned.shape[1]):
         rows = np.flatnonzero(assigned[:, k] >= 0)
         if weights[rows].sum() > 0.5:
             values.append(np.average(distance2[rows, k], weights=weights[rows]))
-    return np.asarray(values, dtype=float)
+            indexes.append(k)
+    return np.asarray(values, dtype=float), np.asarray(indexes, dtype=np.int64)
