@@ -16,7 +16,7 @@ from mazeslam.envs.laser import RayCaster
 from mazeslam.envs.maze import generate_maze, parse_maze
 from mazeslam.envs.maze_env import MazeEnv
 from mazeslam.envs.simulator import SimulationConfig
-from mazeslam.envs.vector_env import MazeVectorEnv
+from mazeslam.envs.vector_env import MazeVectorEnv, box_muller
 from mazeslam.envs.walls import wall_geometry
 
 
@@ -90,6 +90,17 @@ def test_an_env_runs_the_same_alone_as_in_a_vector_across_autoresets():
     assert together[4][:, chosen].any() or together[5][:, chosen].any()  # it went through an episode end
     for part_together, part_alone in zip(together, alone):
         np.testing.assert_array_equal(part_together[:, chosen], part_alone[:, 0])
+
+
+def test_box_muller_makes_independent_standard_normals():
+    from scipy import stats
+
+    normals = np.random.default_rng(0).random(200_000, dtype=np.float32)
+    box_muller(normals)
+    assert normals.dtype == np.float32 and np.isfinite(normals).all()
+    assert stats.kstest(normals, "norm").pvalue > 0.01  # the standard normal's distribution
+    assert abs(np.corrcoef(normals[:100_000], normals[100_000:])[0, 1]) < 0.01  # a pair's two halves
+    assert abs(np.corrcoef(normals[:-1], normals[1:])[0, 1]) < 0.01  # neighbours
 
 
 def test_next_step_autoreset():

@@ -28,8 +28,8 @@ import numpy as np
 from mazeslam.envs.maze import Maze
 from mazeslam.envs.walls import block_edges, solid_blocks
 
-#: Smallest |direction component| of a ray; smaller ones are raised to it (the ray then never
-#: reaches the next edge along that axis within any range).
+#: Smallest |direction component| of a ray the cast divides by; a smaller one counts as this (the
+#: ray then never reaches the next edge along that axis within any range).
 TINY_COMPONENT = 1e-12
 #: Band crossings per axis ``MazeGrids.cast_edges`` looks at per pass, for the rays not settled in their
 #: sensor's cell.
@@ -110,11 +110,14 @@ class MazeGrids:
         meaningless where the distance is inf.
 
         A ray enters a solid block only where it enters a wall band (cell interiors are free), so
-        only its crossings into the bands ``k s -+ t/2`` are looked at. First, from the sensors'
-        cells alone, the rays that leave their cell through a wall (about half); then the others'
-        crossings, ``LOOKAHEAD`` per axis at a time (``_BandCrossings``). Which face a ray meets is
-        decided in float32 (each ray alike, whatever else is cast with it); its distance is then
-        measured exactly to that face, in float64.
+        only its crossings into the bands ``k s -+ t/2`` are looked at. First, from its first
+        crossing on each axis and one lookup in a per-sensor table (``_Sensors.table``), a ray that
+        leaves its sensor's cell through a wall (about half), or through the open side into the
+        neighbour cell and then meets the post at the gap's end, the neighbour's side wall or its
+        far wall (about a third); then the others' crossings, ``LOOKAHEAD`` per axis at a time
+        (``_BandCrossings``). Which face a ray meets is decided in float32 (each ray alike,
+        whatever else is cast with it); its distance is then measured exactly to that face, in
+        float64. A direction component under ``TINY_COMPONENT`` counts as that small.
         """
         count, beams = len(envs), len(bearings)
         work = self._workspace(count, beams)
@@ -123,38 +126,34 @@ class MazeGrids:
         up = direction > 0
         inverse = np.abs(direction, out=work.inverse, casting="same_kind")
         np.divide(1, inverse, out=inverse)  # (2, R) m along the ray per m along each axis
+        np.minimum(inverse, np.float32(1 / TINY_COMPONENT), out=inverse)
         first = work.first
         np.copyto(first.reshape(2, count, beams), sensors.ahead[..., :1])
         np.copyto(first.reshape(2, count, beams), sensors.ahead[..., 1:], where=up.reshape(2, count, beams))
         first *= inverse  # (2, R) m to the first band crossing along each axis
         across_x = first[0] <= first[1]
-        # Leaving the own cell: the nearer first crossing, through a wall if the block there is solid.
+        # Leaving the own cell across axis a (the nearer first crossing): through its wall there if
+        # that block is solid; else, through the open side into the neighbour cell, the post at the
+        # gap's end if the ray enters b's band within the gap, the neighbour's wall along b if it
+        # enters that band before the far wall, else the far wall (case 2, 1, 0): one table entry
+        # per sensor, ray code and case, the face's block edge or -1 (not settled here).
+        near, far = np.minimum(first[0], first[1]), np.maximum(first[0], first[1])
+        inverse_a = np.where(across_x, inverse[0], inverse[1])
+        case = far < inverse_a * np.float32(self.thickness) + near  # b entered within the gap (post)
+        case = case.view(np.uint8) + (far <= inverse_a * np.float32(self.cell_size) + near)  # + before the far wall
         code = work.code
         np.copyto(code, work.code_base)
         code += across_x.view(np.uint8) << 2 | up[1].view(np.uint8) << 1 | up[0].view(np.uint8)
-        done = sensors.own_done.take(code)
-        edge = sensors.own_edge.take(code)
+        code *= 3
+        code += case
+        edge = sensors.table.take(code)
         missed = np.zeros(count * beams, dtype=bool)
-        rest = np.flatnonzero(~done)
-        if len(rest):  # through the own cell's open side: the neighbour cell's walls, as above
-            ray_code = code.take(rest)
-            first_rest, inverse_rest = np.take(first, rest, axis=1), np.take(inverse, rest, axis=1)
-            rest_x = across_x.take(rest)
-            near, far = np.minimum(first_rest[0], first_rest[1]), np.maximum(first_rest[0], first_rest[1])
-            inverse_a = np.where(rest_x, inverse_rest[0], inverse_rest[1])
-            post = far < inverse_a * np.float32(self.thickness) + near  # b entered within the gap
-            side = far <= inverse_a * np.float32(self.cell_size) + near  # b entered before the far wall
-            post_solid, side_solid, far_solid = (part.take(ray_code) for part in sensors.next_solid)
-            solid = np.where(side, np.where(post, post_solid, side_solid), far_solid)
-            settled = rest[solid]
-            across_x[settled] = (rest_x ^ side)[solid]
-            edge[settled] = np.where(side, sensors.side_edge.take(ray_code), sensors.far_edge.take(ray_code))[solid]
-            rest = rest[~solid]
+        rest = np.flatnonzero(edge < 0)
         if len(rest):
             crossings = _BandCrossings(self, sensors, rest, beams, direction, up, inverse, first, across_x)
-            rest_x, rest_edge, rest_missed = crossings.hits(max_range)
-            across_x[rest], edge[rest], missed[rest] = rest_x, rest_edge, rest_missed
-        return self._measure(sensors, direction, across_x, edge, missed, max_range, (count, beams))
+            _, rest_edge, rest_missed = crossings.hits(max_range)
+            edge[rest], missed[rest] = rest_edge, rest_missed
+        return self._measure(sensors, direction, edge, missed, max_range, (count, beams))
 
     def _workspace(self, count: int, beams: int) -> _Workspace:
         """Arrays a cast of ``count`` sensors by ``beams`` beams reuses (not returned)."""
@@ -163,29 +162,28 @@ class MazeGrids:
             work = self._work = _Workspace(count, beams)
         return work
 
-    def _measure(self, sensors, direction, across_x, edge, missed, max_range, shape):
+    def _measure(self, sensors, direction, edge, missed, max_range, shape):
         """``cast_edges``'s ``(distances, edges, along)`` of the rays along ``direction`` (2, R) that meet
-        the block edge ``edge`` (R,) (an index into ``xs`` then ``ys``), a vertical one where
-        ``across_x``; none where ``missed``."""
-        across_x, edge, missed = across_x.reshape(shape), edge.reshape(shape), missed.reshape(shape)
+        the block edge ``edge`` (R,) (an index into ``xs`` then ``ys``: a vertical face first); none
+        where ``missed``."""
         work = self._workspace(*shape)
-        normal, sideways, origin, other = work.normal, work.sideways, work.origin, work.other
-        np.copyto(normal, direction[1].reshape(shape))
-        np.copyto(normal, direction[0].reshape(shape), where=across_x)
-        np.copyto(sideways, direction[0].reshape(shape))
-        np.copyto(sideways, direction[1].reshape(shape), where=across_x)
-        np.copyto(origin, sensors.origin[1][:, None])
-        np.copyto(origin, sensors.origin[0][:, None], where=across_x)
-        np.copyto(other, sensors.origin[0][:, None])
-        np.copyto(other, sensors.origin[1][:, None], where=across_x)
-        position = self.edges.take(edge, mode="clip")
-        position -= origin
-        exact = np.divide(position, normal, out=position)
-        np.multiply(exact, sideways, out=sideways)
-        along = sideways + other
+        rays = len(edge)
+        # Per ray, the index into (2, R) arrays of its component along the face's normal (x for a
+        # vertical face) and of the one along the face.
+        normal = np.multiply(edge >= len(self.xs), rays, out=work.normal_index, casting="unsafe")
+        normal += work.rays
+        sideways = np.subtract(work.both_axes, normal, out=work.sideways_index)
+        origins = np.repeat(sensors.origin, shape[1], axis=1).ravel()  # (2 R,) x, y of each ray's sensor
+        components = direction.ravel()
+        exact = self.edges.take(edge, mode="clip")
+        exact -= origins.take(normal)
+        exact /= components.take(normal)  # m along the ray to the face
+        along = components.take(sideways)
+        along *= exact
+        along += origins.take(sideways)
         missed |= exact > max_range
         exact[missed] = np.inf
-        return exact, edge, along
+        return exact.reshape(shape), edge.reshape(shape), along.reshape(shape)
 
     # -- wall faces seen --------------------------------------------------------------------
     def bin_counts(self, spacing: float) -> tuple[int, int]:
@@ -316,7 +314,9 @@ class _Workspace:
         self.first = np.empty((2, count * beams), dtype=np.float32)
         self.code_base = np.repeat(np.arange(0, 8 * count, 8, dtype=np.int32), beams)
         self.code = np.empty_like(self.code_base)
-        self.normal, self.sideways, self.origin, self.other = np.empty((4, count, beams))
+        self.rays = np.arange(count * beams, dtype=np.int32)
+        self.both_axes = count * beams + 2 * self.rays  # an index into (2, R) arrays plus its other axis'
+        self.normal_index, self.sideways_index = np.empty((2, count * beams), dtype=np.int32)
 
 
 class _Sensors:
@@ -327,10 +327,12 @@ class _Sensors:
         ahead: (2, K, 2) float32, per axis and sense (down, up): metres along that axis to the
             first wall band entered (that of line ``line``: its near face at ``line s -+ t/2``).
         line: (2, K, 2) that line's index.
-        own_done, own_edge: (K * 8,) per sensor and ray code ``4 across_x + 2 up_y + up_x``: whether
-            a ray leaving the sensor's cell first across x (else y), moving up or down each axis,
-            meets a wall there (only for a sensor inside a cell, not in a wall band), and the block
-            edge of that face (an index into ``MazeGrids.edges``).
+        table: (K * 8 * 3,) int32 per sensor, ray code ``4 across_x + 2 up_y + up_x`` (a ray
+            leaving the sensor's cell first across x, else y, moving up or down each axis) and case
+            (0: it next meets the neighbour cell's far wall, 1: its wall along the other axis, 2:
+            the post at the gap's end): the block edge (an index into ``MazeGrids.edges``) of the
+            face it meets, the own cell's if solid, else the one of the case if solid, else -1
+            (only for a sensor inside a cell, not in a wall band: -1 throughout).
     """
 
     def __init__(self, grids: MazeGrids, envs: np.ndarray, x: np.ndarray, y: np.ndarray):
@@ -349,10 +351,11 @@ class _Sensors:
         # along b (+2 along a, +1 along b) and its far wall along a (+3 along a), in blocks.
         solid = grids.solid.take(block[:, None, None] + grids.code_offsets, mode="clip")  # (K, 4, 8)
         solid &= inside[:, None, None]
-        self.own_done, self.next_solid = solid[:, 0].ravel(), solid[:, 1:].transpose(1, 0, 2).reshape(3, -1)
         edges = np.where(_CODE_EDGE_X, j[:, None, None], i[:, None, None] + len(grids.xs)) + _CODE_EDGE_STEP
-        edges = edges.astype(np.int32)  # (K, 3, 8): the own cell's face, the face along b, the far face
-        self.own_edge, self.side_edge, self.far_edge = (edges[:, k].ravel() for k in range(3))
+        # (K, 8, 3) per case (far, side, post): the own cell's face if solid, else the face met.
+        own, met = solid[:, :1], solid[:, _CASE_BLOCK]
+        faces = np.where(met, edges[:, _CASE_FACE], -1)
+        self.table = np.where(own, edges[:, :1], faces).transpose(0, 2, 1).astype(np.int32).ravel()
         self.inside, self.envs = inside, envs
 
 
@@ -368,6 +371,8 @@ _UP_B = np.where(_X_CODES, _CODE // 2 % 2, _CODE % 2)  # whether moving up along
 #: the step from the own cell's block index.
 _CODE_EDGE_X = np.stack([_X_CODES, ~_X_CODES, _X_CODES])
 _CODE_EDGE_STEP = np.stack([_UP_CODES, _UP_B, _UP_CODES + 2 * (2 * _UP_CODES - 1)])
+#: Per case of ``_Sensors.table`` (far, side, post): its block in ``_code_offsets`` and its face.
+_CASE_BLOCK, _CASE_FACE = [3, 2, 1], [2, 1, 1]
 
 
 def _code_offsets(width: int) -> np.ndarray:
@@ -408,7 +413,8 @@ class _BandCrossings:
         (whether the first crossing along x is the nearer)."""
         s, half = grids.cell_size, grids.thickness / 2
         height, width = grids.solid.shape[1:]
-        self.solid = grids.solid.ravel()
+        self.solid = grids.solid.view(np.uint8).ravel()
+        self.countdown = np.arange(LOOKAHEAD, 0, -1, dtype=np.uint8)[:, None]  # L - lane
         self.thin = np.float32(grids.thickness / s)  # share of a cell's width a wall band takes
         self.across = np.array([width, 1], dtype=np.int32)[:, None, None]
         sensor = rays // beams
@@ -449,61 +455,69 @@ class _BandCrossings:
         """(M,) arrays: whether each ray's hit is on a vertical face, the block edge of the face
         (an index into ``MazeGrids.edges``), whether it has none within ``max_range``."""
         count = self.first.shape[-1]
-        best = np.full((2, count), np.inf, dtype=np.float32)  # nearest solid crossing per axis
-        lanes = np.arange(LOOKAHEAD, dtype=np.float32)[:, None]
-        int_lanes = np.arange(LOOKAHEAD, dtype=np.int32)[:, None]
+        best = np.full((2, count), np.inf, dtype=np.float32)  # nearest solid crossing per axis, m
+        crossing = np.zeros((2, count), dtype=np.int32)  # and its n
+        lanes = np.arange(LOOKAHEAD, dtype=np.int32)[:, None]
+        last = np.float32(LOOKAHEAD - 1)
         active = np.arange(count)
-        t0, u0, base, spacing, du, stride = (
+        t0, u0, base, spacing, du, stride, n0 = (
             self.t0,
             self.u0,
             self.base,
             self.spacing,
             self.spacing * self.rate,
             self.stride,
+            self.n0,
         )
         while True:
-            t = lanes * spacing[:, None]
-            t += t0[:, None]  # (2, L, M') m
             u = lanes * du[:, None]
-            u += u0[:, None]
+            u += u0[:, None]  # (2, L, M') cells
             band = np.floor(u)
             u -= self.thin
             band += np.floor(u, out=u)
             with np.errstate(invalid="ignore"):  # rays along an axis: far crossings, any block
                 index = band.astype(np.int32)
             index *= self.across
-            index += int_lanes * stride[:, None]
+            index += lanes * stride[:, None]
             index += base[:, None]
-            found = np.where(self.solid.take(index, mode="clip"), t, np.float32(np.inf)).min(axis=1)  # (2, M')
+            solid = self.solid.take(index, mode="clip")  # (2, L, M') 0 or 1
+            solid *= self.countdown
+            first_solid = solid.max(axis=1)  # (2, M') L - the first solid crossing's lane, 0: none
+            lane = np.subtract(LOOKAHEAD, first_solid, dtype=np.int32)
+            found = lane.astype(np.float32)
+            found *= spacing
+            found += t0  # (2, M') m, as lane * spacing + t0 for every lane
+            found = np.where(first_solid > 0, found, np.float32(np.inf))
+            lane += n0
             if len(active) < count:
-                np.minimum(best[:, active], found, out=found)
-                best[:, active] = found
+                nearer = found < best[:, active]
+                best[:, active] = np.where(nearer, found, best[:, active])
+                crossing[:, active] = np.where(nearer, lane, crossing[:, active])
             else:
-                best = found
-            limit = (t[:, -1] + spacing).min(axis=0)  # nearest crossing not looked at
+                best, crossing = found, lane
+            limit = (last * spacing + t0 + spacing).min(axis=0)  # nearest crossing not looked at
             done = (found.min(axis=0) < limit) | (limit > max_range)
             if done.all():
                 break
             keep = ~done
             active = active[keep]
-            t0, u0, base, spacing, du, stride = (
-                np.compress(keep, part, axis=-1) for part in (t0, u0, base, spacing, du, stride)
+            t0, u0, base, spacing, du, stride, n0 = (
+                np.compress(keep, part, axis=-1) for part in (t0, u0, base, spacing, du, stride, n0)
             )
             t0 += LOOKAHEAD * spacing
             u0 += LOOKAHEAD * du
             base += LOOKAHEAD * stride
+            n0 = n0 + LOOKAHEAD
         across_x = best[0] <= best[1]
-        with np.errstate(invalid="ignore"):  # none found: inf
-            edge = np.rint((best - self.first) / self.spacing).astype(np.int32)  # the crossings found
-        edge *= self.steps
-        edge += self.edge0
+        crossing *= self.steps
+        crossing += self.edge0
         missed = ~(np.minimum(best[0], best[1]) <= max_range * (1 + FLOAT32_SLACK))
-        return across_x, np.where(across_x, edge[0], edge[1]), missed
+        return across_x, np.where(across_x, crossing[0], crossing[1]), missed
 
 
 def _directions(heading: np.ndarray, bearings: np.ndarray, out: np.ndarray | None = None) -> np.ndarray:
     """(2, K, N) world unit vectors (x, y) of the beams ``bearings`` (N,) (rad) of sensors facing
-    ``heading`` (K,) (rad); components under ``TINY_COMPONENT`` raised to it."""
+    ``heading`` (K,) (rad)."""
     cos_h, sin_h = np.cos(heading)[:, None], np.sin(heading)[:, None]
     cos_b, sin_b = np.cos(bearings), np.sin(bearings)
     direction = np.empty((2, len(heading), len(bearings))) if out is None else out
@@ -511,7 +525,6 @@ def _directions(heading: np.ndarray, bearings: np.ndarray, out: np.ndarray | Non
     direction[0] -= sin_h * sin_b
     np.multiply(sin_h, cos_b, out=direction[1])
     direction[1] += cos_h * sin_b
-    direction[np.abs(direction) < TINY_COMPONENT] = TINY_COMPONENT
     return direction
 
 

@@ -208,8 +208,8 @@ class MazeVectorEnv(VectorEnv):
         """The listed envs' random draws for one step (float32), from each env's own generator: standard
         normals for the wheel slip (E', physics steps, 2) and the range noise (E', N), and uniforms
         for the dropouts (E', N) (ones without dropouts: never dropped). Each generator is drawn
-        ``DRAW_AHEAD`` steps at a time (normals, then uniforms), so the draws of an env depend on
-        its own history only."""
+        ``DRAW_AHEAD`` steps at a time (uniforms made normals by ``box_muller``, then the dropout
+        uniforms), so the draws of an env depend on its own history only."""
         empty = envs[self._drawn[envs] == DRAW_AHEAD]
         for env in empty:
             self._draw_ahead(env)
@@ -226,7 +226,9 @@ class MazeVectorEnv(VectorEnv):
         """Refill env ``env``'s ``DRAW_AHEAD`` steps of draws from its generator."""
         rng = self.generators[env]
         assert rng is not None  # reset first
-        rng.standard_normal(dtype=np.float32, out=self._normals[env])
+        normals = self._normals[env].reshape(-1)
+        rng.random(dtype=np.float32, out=normals)
+        box_muller(normals)
         if self._uniforms is not None:
             rng.random(dtype=np.float32, out=self._uniforms[env])
         self._drawn[env] = 0
@@ -422,6 +424,23 @@ class SubEnv:
     @property
     def seen(self) -> np.ndarray:
         return np.ones(len(self.seen_points), dtype=bool)
+
+
+def box_muller(uniforms: np.ndarray) -> None:
+    """Turn float32 ``uniforms`` in [0, 1) (1-D, even length) into independent standard normals, in
+    place: the first half's radii with the second half's angles (Box-Muller), a few vectorised
+    float32 calls, several times faster than numpy's float32 ziggurat sampler element for element.
+    Each element's result depends only on the array's length and its place in it."""
+    half = len(uniforms) // 2
+    radius = np.log1p(-uniforms[:half])  # 1 - u in (0, 1]: a finite log
+    radius *= -2
+    np.sqrt(radius, out=radius)  # at most sqrt(2 * 24 ln 2) = 5.8 for float32 uniforms
+    angle = uniforms[half:]
+    angle *= np.float32(2 * np.pi)
+    np.cos(angle, out=uniforms[:half])
+    np.sin(angle, out=uniforms[half:])
+    uniforms[:half] *= radius
+    uniforms[half:] *= radius
 
 
 def _env_seeds(seed: int | list[int | None] | None, count: int) -> list[int | None]:
