@@ -213,12 +213,17 @@ class MazeGrids:
         ``cast_edges`` gives them): bins of ``spacing`` metres along each block edge, vertical edges
         first, then horizontal ones."""
         base, low, top = self._bin_tables(spacing)
-        start = low[0] if (low == low[0]).all() else low.take(edge, mode="clip")
-        step = ((along - start) / spacing).astype(np.int64)
-        np.maximum(step, 0, out=step)
-        np.minimum(step, top.take(edge, mode="clip"), out=step)
-        step += base.take(edge, mode="clip")
-        return step
+        step = np.subtract(along, low[0] if self._bins_square else low.take(edge, mode="clip"))
+        step /= spacing
+        bins = step.astype(np.int64)
+        np.maximum(bins, 0, out=bins)
+        if self._bins_square:  # every block edge has as many bins, and they start alike
+            np.minimum(bins, top[0], out=bins)
+            bins += edge * (top[0] + 1)
+        else:
+            np.minimum(bins, top.take(edge, mode="clip"), out=bins)
+            bins += base.take(edge, mode="clip")
+        return bins
 
     def _bin_tables(self, spacing: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Per block edge (``edges``): its first ``edge_bins`` bin, where its bins start (m) and its
@@ -231,6 +236,7 @@ class MazeGrids:
             low = np.where(vertical, self.ys[0], self.xs[0])
             top = np.where(vertical, along_y, along_x) - 1
             self._bins_spacing, self._bins = spacing, (base, low, top)
+            self._bins_square = along_x == along_y and self.xs[0] == self.ys[0]  # base = edge * bins per edge
         return self._bins
 
     def wall_bins(self, env: int, spacing: float) -> np.ndarray:

@@ -126,7 +126,7 @@ class MazeVectorEnv(VectorEnv):
         return self._observation(np.zeros((self.num_envs, 2))), self._infos(envs)
 
     def step(self, actions):
-        actions = np.clip(np.asarray(actions, dtype=float).reshape(self.num_envs, 2), -1.0, 1.0)
+        actions = np.minimum(np.maximum(np.asarray(actions, dtype=float).reshape(self.num_envs, 2), -1.0), 1.0)
         resetting = self._autoreset.copy()
         if resetting.any():
             self._reset_envs(np.flatnonzero(resetting), [None] * int(resetting.sum()), {})
@@ -284,8 +284,11 @@ class MazeVectorEnv(VectorEnv):
             starts = path[:, touching].transpose(1, 2, 0).tolist()  # (E', steps + 1, 2)
             moves = np.stack([step_x[touching], step_y[touching]], axis=2).tolist()  # (E', steps, 2)
             near = boxes[:, touching].transpose(1, 2, 0).tolist()  # (E', B, 4)
+            # The boxes within ``reach`` of the wall-free path: being pushed out of walls moves a
+            # robot less than its path's length, so it can overlap no other.
+            close = (squared[touching].min(axis=1) < reach * reach).tolist()  # (E', B)
             for k, env in enumerate(touching.tolist()):
-                first, solid = firsts[k], [box for box in near[k] if box[0] != np.inf]
+                first, solid = firsts[k], [box for box, kept in zip(near[k], close[k]) if kept]
                 x, y = starts[k][first]
                 x, y, touched[env] = slide(x, y, moves[k][first:], robot.body_radius, solid)
                 position[0, env], position[1, env] = x, y
