@@ -3,8 +3,9 @@
 Outputs in the run's folder: ``occupancy.pgm`` + ``occupancy.yaml`` (ROS map_server) and
 ``occupancy.png`` (the best particle's map), ``slam.png`` (that map with the paths and particles),
 ``trajectory.csv`` (the cloud's weighted mean at every
-record with its covariance), ``best_trajectory.csv`` (the best particle's path) and ``map.json``
-(run facts and, with truth, the errors; strict JSON).
+record with its covariance), ``best_trajectory.csv`` (the best particle's path), ``map.json``
+(run facts and, with truth, the errors; strict JSON) and, with ``--animate``, ``slam.mp4`` or
+``slam.gif`` (the best particle's map growing, ``mazeslam.grid.animation``).
 """
 
 from __future__ import annotations
@@ -25,6 +26,9 @@ from mazeslam.grid.map_io import grid_states, write_map
 from mazeslam.loaded_run import LoadedRun
 from mazeslam.slam import SlamConfig
 
+#: About how many frames ``--animate`` draws, whatever the log's length.
+ANIMATION_FRAMES = 150
+
 #: The grid filter's rows in the error table.
 GRID_MEAN, GRID_BEST = "grid filter (mean)", "grid filter (best particle)"
 
@@ -36,18 +40,22 @@ def grid_params(config: SlamConfig) -> GridSlamParams:
     return config.grid
 
 
-def grid_on_run(run: LoadedRun, config: SlamConfig, progress: bool = False) -> GridSlamResult:
+def grid_on_run(run: LoadedRun, config: SlamConfig, progress: bool = False, snapshot_every: int = 0) -> GridSlamResult:
     """The grid filter over ``run``, moving by its odometry with the glitch pairs summed and lone
-    glitches left out (``[odometry] jump_tolerance``)."""
+    glitches left out (``[odometry] jump_tolerance``); ``snapshot_every``: see ``run_grid_slam``."""
     moved_by = run.log_with_glitch_pairs_summed(config.odometry.jump_tolerance)
-    return run_grid_slam(moved_by, run.geometry, run.start_pose, grid_params(config), progress)
+    return run_grid_slam(moved_by, run.geometry, run.start_pose, grid_params(config), progress, snapshot_every)
 
 
-def run_grid_command(run: LoadedRun, config: SlamConfig, out_dir: Path, progress: bool = True) -> list[str]:
+def run_grid_command(
+    run: LoadedRun, config: SlamConfig, out_dir: Path, progress: bool = True, animate: bool = False
+) -> list[str]:
     """Run the grid filter on ``run`` (laser odometry from ``[scan_matching]`` when enabled), write
-    its outputs into ``out_dir`` and return the lines to print."""
+    its outputs into ``out_dir`` and return the lines to print. ``animate``: also the map growing,
+    ``slam.mp4`` (with ffmpeg) or ``slam.gif``, about ``ANIMATION_FRAMES`` frames."""
     params = grid_params(config)
-    result = grid_on_run(run, config, progress)
+    scans = int(run.log.is_scan.sum())
+    result = grid_on_run(run, config, progress, max(1, scans // ANIMATION_FRAMES) if animate else 0)
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
     paths = {
@@ -70,6 +78,19 @@ def run_grid_command(run: LoadedRun, config: SlamConfig, out_dir: Path, progress
         run.truth,
         "reference path" if run.truth_is_reference else "true path",
     )
+    if animate:
+        from mazeslam.grid.animation import animate_grid
+
+        truth = run.truth[result.scan_records] if run.truth is not None else None
+        paths["animation"] = animate_grid(
+            out_dir / "slam.gif",
+            result.snapshots,
+            result.mean_poses,
+            f"{run.path.name}: grid filter, {params.particles} particles",
+            truth,
+            "reference path" if run.truth_is_reference else "true path",
+            progress=progress,
+        )
     duration, seconds = run.log.duration, result.total_seconds
     lines = [
         f"{run.path}: {len(run.log)} records, {len(result.scan_records)} scans "
@@ -102,8 +123,12 @@ def run_grid_command(run: LoadedRun, config: SlamConfig, out_dir: Path, progress
         table, nees = _errors(run, result, config.odometry.jump_tolerance)
         lines += [
             f"Errors against {run.truth_label}, at the scans: ATE [m] (aligned: after the best rigid motion); "
-            f"pose NEES median {nees['median']:.2f}, {100 * (nees['inside_95'] or 0):.0f} % inside "
-            f"{POSE_BOUND_95:.2f} (consistent: 3)",
+            + (
+                f"pose NEES median {nees['median']:.2f}, {100 * nees['inside_95']:.0f} % inside "
+                f"{POSE_BOUND_95:.2f} (consistent: 3)"
+                if nees["count"]
+                else "no pose NEES (the particles' covariance is singular at every scan: too few particles)"
+            ),
             table.to_markdown(floatfmt=".4f"),
         ]
         document["ate"], document["nees"] = table.reset_index().to_dict(orient="records"), nees

@@ -68,3 +68,18 @@ def test_the_map_option_picks_the_filter_and_the_particles_go_to_the_one_that_ru
     result = CliRunner().invoke(main, [*options, "--map", "landmarks", "--out", str(tmp_path / "corners")])
     assert result.exit_code == 0, result.output
     assert "FastSLAM: 3 particles" in result.output
+
+
+def test_animate_draws_the_grid_growing(building, tmp_path):
+    simulated, config = building
+    options = ["slam", str(simulated.path), "--config", str(config), "--quiet", "--particles", "2", "--animate"]
+    result = CliRunner().invoke(main, [*options, "--out", str(tmp_path)])
+    assert result.exit_code == 0, result.output
+    assert "corner FastSLAM only" not in result.output
+    animation = next(tmp_path.glob("slam.*[fg4]"))  # slam.gif, or slam.mp4 where ffmpeg is installed
+    assert animation.suffix in (".gif", ".mp4") and animation.stat().st_size > 10_000
+    if animation.suffix == ".gif":
+        from PIL import Image
+
+        with Image.open(animation) as image:
+            assert image.n_frames > 20  # one frame every few scans, not one picture

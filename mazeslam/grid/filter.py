@@ -92,7 +92,7 @@ class GridSlamParams:
         default_factory=lambda: CorrelativeParams(resolution=0.1, sigma=0.1, turn_step=2.0, candidates=3, max_points=90)
     )
     rescue_sigma: tuple = (0.4, 0.3)
-    map_corrected_motion: bool = True
+    map_corrected_motion: bool = False
     rescue_below: float = 0.8
     rescue_gain: float = 0.15
     motion: str = "laser"
@@ -138,13 +138,15 @@ class ScanSensor:
 
 
 class GridSlam:
-    """The particle cloud: poses (P, 3) world frame, log weights (P,), maps (P ``TiledGrid``)."""
+    """The particle cloud: poses (P, 3) world frame, log weights (P,), maps (P ``TiledGrid``) and
+    each path's summed log likelihood (P,) (``best_particle``)."""
 
     def __init__(self, params: GridSlamParams, start_pose, sensor: ScanSensor):
         self.params, self.sensor = params, sensor
         count = params.particles
         self.poses = np.tile(np.asarray(start_pose, dtype=float), (count, 1))
         self.log_weights = np.zeros(count)
+        self.log_likelihoods = np.zeros(count)
         self.maps = [TiledGrid(params.grid) for _ in range(count)]
         self.rng = np.random.default_rng(params.seed)
         self.resamplings = 0
@@ -154,7 +156,10 @@ class GridSlam:
         return normalized_weights(self.log_weights)
 
     def best_particle(self) -> int:
-        return int(np.argmax(self.log_weights))
+        """The particle whose path explains the scans best: the highest ``log_likelihoods``, the
+        sum of its and its ancestors' untempered ``log eta`` over the whole run (gmapping's
+        ``weightSum``). The weights alone restart at every resampling, so they cannot tell."""
+        return int(np.argmax(self.log_likelihoods))
 
     def process(self, ranges: np.ndarray, motion: np.ndarray) -> tuple[float, float, np.ndarray | None]:
         """Move every particle by ``motion`` (3,) (robot frame, since the last processed scan) with
@@ -188,6 +193,7 @@ class GridSlam:
             else:
                 self.poses[index] = predicted
             grid.store(window, integrate_scan(window, rays, self.poses[index], self.params.grid))
+        self.log_likelihoods += log_etas - log_etas.max()
         self.log_weights += (log_etas - log_etas.max()) / (self.params.observation_gain * len(self.poses))
         return matched / len(self.poses), effective_sample_size(self.weights), self._resample_if_needed()
 
@@ -259,6 +265,7 @@ class GridSlam:
             return None
         indexes = systematic_resample(weights, self.rng)
         self.poses = self.poses[indexes]
+        self.log_likelihoods = self.log_likelihoods[indexes]
         self.maps = [self.maps[index].copy() for index in indexes]
         self.log_weights = np.zeros(len(indexes))
         self.resamplings += 1
@@ -297,6 +304,7 @@ class GridSlamResult:
         reckoned: (R, 3) the odometry the filter moved by, from ``reckoned_start`` (3,), at every
             record's time (``odometry_at_record_times``): what carries a scan's pose on to the
             records after it.
+        snapshots: the frames kept for ``--animate`` (``mazeslam.grid.animation.GridSnapshot``).
     """
 
     scan_records: np.ndarray
@@ -315,6 +323,7 @@ class GridSlamResult:
     particles: GridSlam
     reckoned: np.ndarray
     reckoned_start: np.ndarray
+    snapshots: list = field(default_factory=list)
 
     @property
     def resamplings(self) -> int:
@@ -381,8 +390,11 @@ def run_grid_slam(
     start_pose,
     params: GridSlamParams | None = None,
     progress: bool = False,
+    snapshot_every: int = 0,
 ) -> GridSlamResult:
-    """The grid filter over every scan of ``course_log`` (see the module docstring)."""
+    """The grid filter over every scan of ``course_log`` (see the module docstring). With
+    ``snapshot_every`` > 0, every that many scans (and at the last) the best particle's map and the
+    particles are kept for ``--animate`` (``GridSlamResult.snapshots``)."""
     params = params or GridSlamParams()
     began = time.perf_counter()
     motions = scan_motions(course_log, geometry, params, start_pose)
@@ -394,7 +406,7 @@ def run_grid_slam(
     mean_poses, covariances = np.empty((count, 3)), np.empty((count, 3, 3))
     processed, resampled = np.zeros(count, bool), np.zeros(count, bool)
     matched, neff, seconds = np.full(count, np.nan), np.full(count, float(particles)), np.empty(count)
-    pending, peak_map_bytes = np.zeros(3), 0
+    pending, peak_map_bytes, snapshots = np.zeros(3), 0, []
     from tqdm.auto import tqdm  # here: the slam config names the grid's settings, and tqdm is slow to load
 
     for index in tqdm(range(count), desc="grid SLAM", unit="scan", disable=not progress):
@@ -410,6 +422,10 @@ def run_grid_slam(
         node_poses[index], mean_poses[index], covariances[index] = slam.cloud(pending)
         node_parents[index] = parents
         seconds[index] = time.perf_counter() - started
+        if snapshot_every and (index % snapshot_every == 0 or index == count - 1):
+            from mazeslam.grid.animation import snapshot
+
+            snapshots.append(snapshot(index, slam.maps[slam.best_particle()], node_poses[index]))
     best = slam.best_particle()
     return GridSlamResult(
         records,
@@ -428,6 +444,7 @@ def run_grid_slam(
         slam,
         odometry_at_record_times(course_log, start_pose),
         np.asarray(start_pose, dtype=float),
+        snapshots,
     )
 
 
