@@ -36,6 +36,10 @@ TINY_COMPONENT = 1e-12
 LOOKAHEAD = 6
 #: Relative error allowed to the float32 distances of ``_BandCrossings`` (float32 rounding is 6e-8).
 FLOAT32_SLACK = 1e-6
+#: Per lane of ``_BandCrossings.hits``: its index, and ``LOOKAHEAD`` less it (the first solid
+#: lane has the largest among the solid ones).
+_LANES = np.arange(LOOKAHEAD, dtype=np.int32)[:, None]
+_COUNTDOWN = np.arange(LOOKAHEAD, 0, -1, dtype=np.uint8)[:, None]
 
 
 @dataclass
@@ -57,10 +61,12 @@ class MazeGrids:
     edges: np.ndarray = field(init=False, repr=False)
 
     code_offsets: np.ndarray = field(init=False, repr=False)
+    last_block: np.ndarray = field(init=False, repr=False)
 
     def __post_init__(self):
         self.edges = np.concatenate([self.xs, self.ys])
         self.code_offsets = _code_offsets(self.solid.shape[2])
+        self.last_block = np.array(self.solid.shape[1:])[:, None] - 1  # (2, 1) along y, along x
 
     @classmethod
     def like(cls, maze: Maze, count: int) -> MazeGrids:
@@ -84,11 +90,10 @@ class MazeGrids:
 
     def blocks_of(self, x: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Block indices (i, j) of the points (x, y) (metres), each clipped to the grid."""
-        height, width = self.solid.shape[1:]
-        return (
-            np.minimum(np.maximum(_band(y, self.cell_size, self.thickness), 0), height - 1),
-            np.minimum(np.maximum(_band(x, self.cell_size, self.thickness), 0), width - 1),
-        )
+        bands = _band(np.stack([y, x]), self.cell_size, self.thickness)
+        np.maximum(bands, 0, out=bands)
+        i, j = np.minimum(bands, self.last_block, out=bands)
+        return i, j
 
     # -- ray casting ------------------------------------------------------------------------
     def cast_edges(
@@ -127,10 +132,13 @@ class MazeGrids:
         inverse = np.abs(direction, out=work.inverse, casting="same_kind")
         np.divide(1, inverse, out=inverse)  # (2, R) m along the ray per m along each axis
         np.minimum(inverse, np.float32(1 / TINY_COMPONENT), out=inverse)
-        first = work.first
-        np.copyto(first.reshape(2, count, beams), sensors.ahead[..., :1])
-        np.copyto(first.reshape(2, count, beams), sensors.ahead[..., 1:], where=up.reshape(2, count, beams))
-        first *= inverse  # (2, R) m to the first band crossing along each axis
+        # The sensor's ahead for each ray's sense, picked bit by bit (the float32 patterns of ahead
+        # down, xor ahead up where up): (2, R) m along each axis to the first band crossing.
+        first, picked = work.first, work.first.view(np.int32).reshape(2, count, beams)
+        np.subtract(0, up.view(np.uint8), dtype=np.int32, out=work.first.view(np.int32))  # -1 where up
+        np.bitwise_and(picked, sensors.ahead_flip, out=picked)
+        np.bitwise_xor(picked, sensors.ahead_down, out=picked)
+        first *= inverse  # (2, R) m along the ray to the first band crossing along each axis
         across_x = first[0] <= first[1]
         # Leaving the own cell across axis a (the nearer first crossing): through its wall there if
         # that block is solid; else, through the open side into the neighbour cell, the post at the
@@ -252,23 +260,23 @@ class MazeGrids:
     # -- collisions -------------------------------------------------------------------------
     def boxes_near(self, x: np.ndarray, y: np.ndarray, reach: float) -> np.ndarray:
         """The solid blocks that a disc of radius ``reach`` (m) centred at (x[e], y[e]) in maze e
-        may overlap: (4, E, B) boxes' ``xmin, ymin, xmax, ymax`` (m), the other blocks of the
+        may overlap: (4, B, E) boxes' ``xmin, ymin, xmax, ymax`` (m), the other blocks of the
         neighbourhood as boxes at infinity."""
         # Blocks a disc reaches from its centre's: the next band on each side while it reaches less
         # than a cell's free width (solid blocks lie in wall bands only, one cell apart).
         bands = 1 if reach < self.cell_size - self.thickness else 2 * math.ceil(reach / self.cell_size)
-        offsets = np.arange(-bands, bands + 1)
+        offsets = np.arange(-bands, bands + 1)[:, None]
         height, width = self.solid.shape[1:]
         i, j = self.blocks_of(x, y)
-        i = np.minimum(np.maximum(i[:, None] + offsets, 0), height - 1)  # (E, n)
-        j = np.minimum(np.maximum(j[:, None] + offsets, 0), width - 1)  # (E, n)
-        count, size = len(x), len(offsets)
-        block = (np.arange(count) * (height * width))[:, None, None] + (i * width)[:, :, None] + j[:, None, :]
-        bounds = np.empty((4, count, size, size))
-        bounds[0], bounds[2] = self.xs.take(j)[:, None, :], self.xs.take(j + 1)[:, None, :]
-        bounds[1], bounds[3] = self.ys.take(i)[:, :, None], self.ys.take(i + 1)[:, :, None]
+        i = np.minimum(np.maximum(i + offsets, 0), height - 1)  # (n, E)
+        j = np.minimum(np.maximum(j + offsets, 0), width - 1)  # (n, E)
+        size, count = i.shape
+        block = np.arange(count) * (height * width) + (i * width)[:, None] + j  # (n, n, E): along y, x
+        bounds = np.empty((4, size, size, count))
+        bounds[0], bounds[2] = self.xs.take(j), self.xs.take(j + 1)
+        bounds[1], bounds[3] = self.ys.take(i)[:, None], self.ys.take(i + 1)[:, None]
         np.copyto(bounds, np.inf, where=~self.solid.take(block))
-        return bounds.reshape(4, count, -1)
+        return bounds.reshape(4, -1, count)
 
 
 def slide(
@@ -332,6 +340,8 @@ class _Sensors:
         origin: (2, K) x, y (m).
         ahead: (2, K, 2) float32, per axis and sense (down, up): metres along that axis to the
             first wall band entered (that of line ``line``: its near face at ``line s -+ t/2``).
+        ahead_down, ahead_flip: (2, K, 1) int32, the bit patterns of ahead down, and of ahead
+            down xor ahead up.
         line: (2, K, 2) that line's index.
         table: (K * 8 * 3,) int32 per sensor, ray code ``4 across_x + 2 up_y + up_x`` (a ray
             leaving the sensor's cell first across x, else y, moving up or down each axis) and case
@@ -348,6 +358,8 @@ class _Sensors:
         q = _SENSE * self.origin[..., None] + half  # (2, K, 2): the coordinate along each sense, + t/2
         lines = np.floor(q / s) + 1
         self.ahead = (lines * s - q).astype(np.float32)
+        bits = self.ahead.view(np.int32)
+        self.ahead_down, self.ahead_flip = bits[..., :1], bits[..., 1:] ^ bits[..., :1]  # (2, K, 1) each
         self.line = (_SENSE * lines).astype(np.int64)
         i, j = grids.blocks_of(x, y)
         inside = (i & j & 1).astype(bool)  # (K,) in a cell's interior, not in a wall band
@@ -420,7 +432,6 @@ class _BandCrossings:
         s, half = grids.cell_size, grids.thickness / 2
         height, width = grids.solid.shape[1:]
         self.solid = grids.solid.view(np.uint8).ravel()
-        self.countdown = np.arange(LOOKAHEAD, 0, -1, dtype=np.uint8)[:, None]  # L - lane
         self.thin = np.float32(grids.thickness / s)  # share of a cell's width a wall band takes
         self.across = np.array([width, 1], dtype=np.int32)[:, None, None]
         sensor = rays // beams
@@ -463,8 +474,7 @@ class _BandCrossings:
         count = self.first.shape[-1]
         best = np.full((2, count), np.inf, dtype=np.float32)  # nearest solid crossing per axis, m
         crossing = np.zeros((2, count), dtype=np.int32)  # and its n
-        lanes = np.arange(LOOKAHEAD, dtype=np.int32)[:, None]
-        last = np.float32(LOOKAHEAD - 1)
+        lanes, last = _LANES, np.float32(LOOKAHEAD - 1)
         active = np.arange(count)
         t0, u0, base, spacing, du, stride, n0 = (
             self.t0,
@@ -487,7 +497,7 @@ class _BandCrossings:
             index += lanes * stride[:, None]
             index += base[:, None]
             solid = self.solid.take(index, mode="clip")  # (2, L, M') 0 or 1
-            solid *= self.countdown
+            solid *= _COUNTDOWN
             first_solid = solid.max(axis=1)  # (2, M') L - the first solid crossing's lane, 0: none
             lane = np.subtract(LOOKAHEAD, first_solid, dtype=np.int32)
             found = lane.astype(np.float32)

@@ -256,43 +256,47 @@ class MazeVectorEnv(VectorEnv):
         dt, steps = 1.0 / self.config.logger.physics_rate, slip.shape[1]
         commanded = speeds * dt  # (E, 2) m per physics step
         self._commanded += commanded * steps
-        scale = 1.0 + np.array([odometry.left_scale_error, odometry.right_scale_error])
-        travel = (commanded * scale)[:, None] + slip * (odometry.slip_std * np.sqrt(np.abs(commanded)))[:, None]
-        turn = (travel[..., 1] - travel[..., 0]) / robot.wheelbase  # (E, steps) rad
-        headings = np.cumsum(np.column_stack([self.poses[:, 2], turn]), axis=1)  # before and after each
-        middle = headings[:, :-1] + 0.5 * turn
-        forward = 0.5 * (travel[..., 0] + travel[..., 1])
-        step_x, step_y = forward * np.cos(middle), forward * np.sin(middle)  # (E, steps) m
+        # Physics step by env, env last: (2 wheels, steps, E) m, (steps, E) rad and m.
+        scale = 1.0 + np.array([[odometry.left_scale_error], [odometry.right_scale_error]])
+        commanded = commanded.T
+        travel = (commanded * scale)[:, None] + slip.T * (odometry.slip_std * np.sqrt(np.abs(commanded)))[:, None]
+        turn = (travel[1] - travel[0]) / robot.wheelbase
+        headings = np.empty((steps + 1, self.num_envs))  # before and after each physics step
+        headings[0], headings[1:] = self.poses[:, 2], turn
+        np.cumsum(headings, axis=0, out=headings)
+        middle = headings[:-1] + 0.5 * turn
+        forward = 0.5 * (travel[0] + travel[1])
+        step_x, step_y = forward * np.cos(middle), forward * np.sin(middle)  # (steps, E) m
         start = self.poses[:, :2].T  # (2, E) m
         reach = robot.body_radius + 2 * robot.max_wheel_speed * dt * steps  # with room for slip
-        boxes = self._grids().boxes_near(start[0], start[1], reach)
-        # Every physics step's position without walls, (2, E, steps + 1), the same sums as the
+        boxes = self._grids().boxes_near(start[0], start[1], reach)  # (4, B, E)
+        # Every physics step's position without walls, (2, steps + 1, E), the same sums as the
         # step-by-step loop below; a robot that overlaps no box at any of them never touches a wall.
-        path = np.empty((2, self.num_envs, steps + 1))
-        path[:, :, 0] = start
-        path[0, :, 1:], path[1, :, 1:] = step_x, step_y
-        np.cumsum(path, axis=2, out=path)
-        point = path[:, :, 1:, None]  # (2, E, steps, 1)
+        path = np.empty((2, steps + 1, self.num_envs))
+        path[:, 0] = start
+        path[0, 1:], path[1, 1:] = step_x, step_y
+        np.cumsum(path, axis=1, out=path)
+        point = path[:, None, 1:]  # (2, 1, steps, E)
         gap = point - np.minimum(np.maximum(point, boxes[:2, :, None]), boxes[2:, :, None])
-        squared = gap[0] * gap[0] + gap[1] * gap[1]  # (E, steps, B)
-        overlaps = squared.min(axis=2) < robot.body_radius * robot.body_radius  # (E, steps)
-        touching = np.flatnonzero(overlaps.any(axis=1))
-        position = path[:, :, -1].copy()
+        squared = gap[0] * gap[0] + gap[1] * gap[1]  # (B, steps, E)
+        overlaps = squared.min(axis=0) < robot.body_radius * robot.body_radius  # (steps, E)
+        touching = np.flatnonzero(overlaps.any(axis=0))
+        position = path[:, -1].copy()
         touched = np.zeros(self.num_envs, dtype=bool)
         if len(touching):  # step by step from each one's first overlap on, pushed out of the walls
-            firsts = overlaps[touching].argmax(axis=1).tolist()
-            starts = path[:, touching].transpose(1, 2, 0).tolist()  # (E', steps + 1, 2)
-            moves = np.stack([step_x[touching], step_y[touching]], axis=2).tolist()  # (E', steps, 2)
-            near = boxes[:, touching].transpose(1, 2, 0).tolist()  # (E', B, 4)
+            firsts = overlaps[:, touching].argmax(axis=0).tolist()
+            starts = path[:, :, touching].T.tolist()  # (E', steps + 1, 2)
+            moves = np.stack([step_x[:, touching], step_y[:, touching]]).T.tolist()  # (E', steps, 2)
+            near = boxes[:, :, touching].T.tolist()  # (E', B, 4)
             # The boxes within ``reach`` of the wall-free path: being pushed out of walls moves a
             # robot less than its path's length, so it can overlap no other.
-            close = (squared[touching].min(axis=1) < reach * reach).tolist()  # (E', B)
+            close = (squared[:, :, touching].min(axis=1) < reach * reach).T.tolist()  # (E', B)
             for k, env in enumerate(touching.tolist()):
                 first, solid = firsts[k], [box for box, kept in zip(near[k], close[k]) if kept]
                 x, y = starts[k][first]
                 x, y, touched[env] = slide(x, y, moves[k][first:], robot.body_radius, solid)
                 position[0, env], position[1, env] = x, y
-        self.poses = np.column_stack([position.T, wrap_angle(headings[:, -1])])
+        self.poses = np.column_stack([position.T, wrap_angle(headings[-1])])
         return touched
 
     def _read_odometry(self) -> np.ndarray:
