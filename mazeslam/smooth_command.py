@@ -101,13 +101,19 @@ def known_optimum(run: LoadedRun, config: SlamConfig) -> Smoothed:
     return smooth_run(run, config, truth_identities(run, config.evaluation.match_radius))
 
 
-def optimum_columns(run: LoadedRun, config: SlamConfig, score: RunScore) -> dict | None:
+def optimum_columns(
+    run: LoadedRun, config: SlamConfig, score: RunScore, optimum_poses: np.ndarray | None = None
+) -> dict | None:
     """The known-association optimum's ATE RMSE (m, as estimated and aligned) at the records the filter
     was scored at (``score.records``) and the filter's ratio to it (``optimum_ratio``,
-    ``optimum_aligned_ratio``: 1 is as good as any estimator can be); None without ``has_known_optimum``."""
+    ``optimum_aligned_ratio``: 1 is as good as any estimator can be); None without ``has_known_optimum``.
+    ``optimum_poses``: ``known_optimum(run, config).poses`` (R, 3) if already computed (a sweep computes
+    it once for the runs that share a log and the settings it depends on)."""
     if run.truth is None or not has_known_optimum(run):
         return None
-    poses, truth = known_optimum(run, config).poses[score.records], run.truth[score.records]
+    if optimum_poses is None:
+        optimum_poses = known_optimum(run, config).poses
+    poses, truth = optimum_poses[score.records], run.truth[score.records]
     row = error_table({OPTIMUM: poses}, truth).loc[OPTIMUM]
     return {
         "optimum_ate_rmse": row["ate_rmse"],

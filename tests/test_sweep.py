@@ -1,5 +1,6 @@
 """Sweeps: grid expansion, resuming after a kill, the same seeds giving the same table, Dask."""
 
+import dataclasses
 import json
 import signal
 import subprocess
@@ -10,7 +11,7 @@ import pandas as pd
 import pytest
 
 from mazeslam.config import ConfigError
-from mazeslam.evaluation.sweep import RESULTS, load_sweep, run_sweep, summarise
+from mazeslam.evaluation.sweep import RESULTS, execute_run, load_sweep, optimum_key, run_sweep, summarise
 
 TIMING = ["slam_seconds", "seconds_per_record"]
 
@@ -54,6 +55,22 @@ def test_same_seeds_same_table_in_parallel_or_not(tmp_path):
     assert (tmp_path / "a" / "results.parquet").exists() and (tmp_path / "a" / "summary.md").exists()
     summary = summarise(serial.assign(slam_seconds=0.0, seconds_per_record=0.0), ["slam.fastslam.NPARTICLES"])
     assert list(summary["runs"]) == [2, 2]
+
+
+def test_runs_of_one_log_and_noise_share_one_optimum_and_give_the_same_rows(tmp_path):
+    """The batch optimum does not depend on the particle count: one per log and noise setting,
+    computed once, and each row is what the run gives on its own (simulating and smoothing itself)."""
+    sweep = load_sweep(write_sweep(tmp_path, seeds=(0,), particles=(5, 20), duration=8.0))
+    runs = sweep.runs()
+    assert len({optimum_key(sweep, run) for run in runs}) == 1
+    table = run_sweep(sweep, tmp_path / "out", workers=1, progress=False).table.drop(columns=TIMING)
+    alone = pd.DataFrame([execute_run(sweep, run) for run in runs]).drop(columns=TIMING)
+    assert table["optimum_ratio"].notna().all()
+    pd.testing.assert_frame_equal(table, alone)
+    noisy = load_sweep(write_sweep(tmp_path, seeds=(0,), particles=(5,), duration=8.0))
+    linked = noisy.grid | {"slam.fastslam.sigmaR+slam.fastslam.sigmaB": [[0.002, 0.01], [0.02, 0.1]]}
+    noisy = dataclasses.replace(noisy, grid=linked)
+    assert len({optimum_key(noisy, run) for run in noisy.runs()}) == 2
 
 
 def test_resume_reuses_finished_runs_and_ignores_a_torn_line(tmp_path):

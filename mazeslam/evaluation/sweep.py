@@ -28,8 +28,10 @@ folder, so an interrupted sweep resumes where it stopped; the same seeds give th
 
 from __future__ import annotations
 
+import contextlib
 import dataclasses
 import hashlib
+import importlib
 import itertools
 import json
 import math
@@ -54,7 +56,7 @@ from mazeslam.evaluation.scoring import DEAD_RECKONING, FILTER_MEAN, score_run
 from mazeslam.limits import MAX_SEED, duration_problem
 from mazeslam.loaded_run import load_run
 from mazeslam.slam import SlamConfig, load_slam_config, slam_on_run
-from mazeslam.smooth_command import optimum_columns
+from mazeslam.smooth_command import has_known_optimum, known_optimum, optimum_columns
 
 RESULTS = "runs.jsonl"
 MAPS = "maps"
@@ -231,14 +233,43 @@ def simulate_run(sweep: Sweep, run: dict, logs_folder: str) -> str:
     return key
 
 
+def optimum_key(sweep: Sweep, run: dict) -> str:
+    """A stable name for a run's batch optimum: its log (``simulation_key``) and its slam settings but
+    the filter's particle count and seed, which the smoother does not use (the core grid's three
+    particle counts share one optimum per noise setting and seed)."""
+    _, slam_config = configure(sweep, run["settings"])
+    settings = dataclasses.asdict(slam_config)
+    del settings["fastslam"]["NPARTICLES"], settings["fastslam"]["seed"]
+    identity = {"log": simulation_key(sweep, run), "slam": settings}
+    return hashlib.sha1(json.dumps(identity, sort_keys=True, default=str).encode()).hexdigest()[:16]
+
+
+def _optimum_path(sweep: Sweep, run: dict, logs_folder: str) -> Path:
+    return Path(logs_folder, simulation_key(sweep, run), f"optimum-{optimum_key(sweep, run)}.npy")
+
+
+def optimum_run(sweep: Sweep, run: dict, logs_folder: str) -> None:
+    """Compute the known-association batch optimum of ``run``'s log (written by ``simulate_run`` into
+    ``logs_folder``) with ``run``'s settings, and save its poses at every record, (R, 3), beside the log
+    for ``execute_run`` (nothing when the log has no known optimum). Runs in a worker."""
+    _, slam_config = configure(sweep, run["settings"])
+    loaded = load_run(Path(logs_folder, simulation_key(sweep, run), "run.log"), slam_config.sensor)
+    if has_known_optimum(loaded):
+        np.save(_optimum_path(sweep, run, logs_folder), known_optimum(loaded, slam_config).poses)
+
+
 def execute_run(sweep: Sweep, run: dict, maps_folder: str | None = None, logs_folder: str | None = None) -> dict:
-    """Simulate (or, with ``logs_folder``, read the log ``simulate_run`` wrote there), map and
-    score one run; returns its row (settings, seed, metrics). Runs in a worker."""
+    """Simulate (or, with ``logs_folder``, read the log ``simulate_run`` wrote there, and the
+    optimum ``optimum_run`` saved beside it), map and score one run; returns its row (settings,
+    seed, metrics). Runs in a worker."""
     simulation_config, slam_config = configure(sweep, run["settings"])
     seed = run["seed"]
     slam_config = dataclasses.replace(slam_config, fastslam=dataclasses.replace(slam_config.fastslam, seed=seed))
+    optimum_poses = None
     if logs_folder is not None:
         loaded = load_run(Path(logs_folder, simulation_key(sweep, run), "run.log"), slam_config.sensor)
+        saved = _optimum_path(sweep, run, logs_folder)
+        optimum_poses = np.load(saved) if saved.exists() else None
     else:
         with tempfile.TemporaryDirectory() as folder:
             simulated = simulate(
@@ -264,7 +295,7 @@ def execute_run(sweep: Sweep, run: dict, maps_folder: str | None = None, logs_fo
         "ate_aligned_rmse": filter_row["aligned_rmse"],
         "reckoning_ate_rmse": reckoning_row["ate_rmse"],
         "reckoning_ate_aligned_rmse": reckoning_row["aligned_rmse"],
-        **(optimum_columns(loaded, slam_config, score) or {}),
+        **(optimum_columns(loaded, slam_config, score, optimum_poses) or {}),
         "rpe_trans_rmse": filter_row["rpe_trans_rmse"],
         "rpe_rot_rmse": filter_row["rpe_rot_rmse"],
         "map_rmse": score.map_errors["as estimated"]["rmse"],
@@ -454,33 +485,54 @@ class SweepLock:
 def _execute(sweep: Sweep, runs: list[dict], maps_folder: str, workers: int | None, scheduler: str | None):
     """Yield rows as runs finish, on local processes or a Dask cluster.
 
-    Locally, the distinct simulations are run first (in parallel), then the filter runs on the
-    logs they wrote, the most particles first (the longest runs do not trail at the end, one
-    worker busy and the others idle). A Dask cluster's workers may not share a disk: there each
-    run simulates its own log."""
+    Locally, on one set of worker processes: the distinct simulations are run first (in parallel),
+    then the distinct batch optima of those logs (``optimum_key``), then the filter runs on the logs
+    and optima they wrote, the most particles first (the longest runs do not trail at the end, one
+    worker busy and the others idle). A Dask cluster's workers may not share a disk: there each run
+    simulates its own log and computes its own optimum."""
     if not runs:
         return
     if scheduler:
         yield from _on_dask(scheduler, execute_run, [(sweep, run, maps_folder) for run in runs])
         return
     runs = sorted(runs, key=lambda run: -configure(sweep, run["settings"])[1].fastslam.NPARTICLES)
-    with tempfile.TemporaryDirectory() as logs:
+    with tempfile.TemporaryDirectory() as logs, _local_pool(workers) as pool:
         distinct = list({simulation_key(sweep, run): run for run in runs}.values())
-        for _ in _locally(workers, simulate_run, [(sweep, run, logs) for run in distinct]):
+        for _ in _locally(pool, simulate_run, [(sweep, run, logs) for run in distinct]):
             pass
-        yield from _locally(workers, execute_run, [(sweep, run, maps_folder, logs) for run in runs])
+        optima = list({optimum_key(sweep, run): run for run in runs}.values())
+        for _ in _locally(pool, optimum_run, [(sweep, run, logs) for run in optima]):
+            pass
+        yield from _locally(pool, execute_run, [(sweep, run, maps_folder, logs) for run in runs])
 
 
-def _locally(workers: int | None, function, calls: list[tuple]):
-    """``function(*arguments)`` for each of ``calls``, results yielded as they finish: in this
-    process for one worker, else on ``workers`` processes (default: one per core)."""
+#: What a run loads on first use (``metrics.map_error``'s scipy.optimize): loaded once here before the
+#: worker processes fork from this one, instead of once in each of them.
+WORKER_MODULES = ("scipy.optimize",)
+
+
+@contextlib.contextmanager
+def _local_pool(workers: int | None):
+    """``workers`` local processes (default: one per core), forked once for every phase of a sweep;
+    None for one worker (the runs go in this process)."""
     if workers == 1:
+        yield None
+        return
+    for name in WORKER_MODULES:
+        importlib.import_module(name)
+    with ProcessPoolExecutor(max_workers=workers) as pool:
+        yield pool
+
+
+def _locally(pool: ProcessPoolExecutor | None, function, calls: list[tuple]):
+    """``function(*arguments)`` for each of ``calls``, results yielded as they finish: on ``pool``'s
+    processes, or in this process when ``pool`` is None."""
+    if pool is None:
         for arguments in calls:
             yield function(*arguments)
         return
-    with ProcessPoolExecutor(max_workers=workers) as pool:
-        for future in as_completed([pool.submit(function, *arguments) for arguments in calls]):
-            yield future.result()
+    for future in as_completed([pool.submit(function, *arguments) for arguments in calls]):
+        yield future.result()
 
 
 def _on_dask(scheduler: str, function, calls: list[tuple]):
