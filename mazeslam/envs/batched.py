@@ -90,7 +90,9 @@ class MazeGrids:
 
     def blocks_of(self, x: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Block indices (i, j) of the points (x, y) (metres), each clipped to the grid."""
-        bands = _band(np.stack([y, x]), self.cell_size, self.thickness)
+        points = np.empty((2, len(x)))
+        points[0], points[1] = y, x
+        bands = _band(points, self.cell_size, self.thickness)
         np.maximum(bands, 0, out=bands)
         i, j = np.minimum(bands, self.last_block, out=bands)
         return i, j
@@ -156,7 +158,7 @@ class MazeGrids:
         code += case
         edge = sensors.table.take(code)
         missed = np.zeros(count * beams, dtype=bool)
-        rest = np.flatnonzero(edge < 0)
+        rest = (edge < 0).nonzero()[0]
         if len(rest):
             crossings = _BandCrossings(self, sensors, rest, beams, direction, up, inverse, first, across_x)
             _, rest_edge, rest_missed = crossings.hits(max_range)
@@ -354,7 +356,8 @@ class _Sensors:
     def __init__(self, grids: MazeGrids, envs: np.ndarray, x: np.ndarray, y: np.ndarray):
         s, half = grids.cell_size, grids.thickness / 2
         height, width = grids.solid.shape[1:]
-        self.origin = np.stack([x, y])
+        self.origin = np.empty((2, len(x)))
+        self.origin[0], self.origin[1] = x, y
         q = _SENSE * self.origin[..., None] + half  # (2, K, 2): the coordinate along each sense, + t/2
         lines = np.floor(q / s) + 1
         self.ahead = (lines * s - q).astype(np.float32)
@@ -435,14 +438,14 @@ class _BandCrossings:
         self.thin = np.float32(grids.thickness / s)  # share of a cell's width a wall band takes
         self.across = np.array([width, 1], dtype=np.int32)[:, None, None]
         sensor = rays // beams
-        up = np.take(up, rays, axis=1)
+        up = up.take(rays, axis=1)
         count = len(sensors.envs)
         key = up + 2 * sensor  # (2, M): per axis, the sensor's sense entry
         key[1] += 2 * count
-        self.first = np.take(first, rays, axis=1)
-        self.spacing = np.take(inverse, rays, axis=1)
+        self.first = first.take(rays, axis=1)
+        self.spacing = inverse.take(rays, axis=1)
         self.spacing *= np.float32(s)
-        rate = np.take(direction, rays, axis=1)[::-1].astype(np.float32)
+        rate = direction.take(rays, axis=1)[::-1].astype(np.float32)
         rate *= np.float32(1 / s)
         offset = ((sensors.origin[::-1] + half) / s).astype(np.float32).take(sensor, axis=1)
         unit = np.array([[1], [width]], dtype=np.int32)  # flat stride of a block along x, along y
@@ -451,7 +454,8 @@ class _BandCrossings:
         # Crossing 0 on the axis a ray left its cell across is free (the cell's open side).
         inside = sensors.inside[sensor]
         across = across_x[rays]
-        n0 = np.stack([inside & across, inside & ~across]).astype(np.int32)
+        n0 = np.empty((2, len(rays)), dtype=np.int32)
+        n0[0], n0[1] = inside & across, inside & ~across
         self.steps = (4 * up - 2).astype(np.int32)  # block edges a crossing: 2, down or up
         self.stride = self.steps * unit  # flat index steps a crossing
         edges = 2 * sensors.line + (_SENSE < 0)  # block edge of the first band's near face
@@ -518,7 +522,7 @@ class _BandCrossings:
             keep = ~done
             active = active[keep]
             t0, u0, base, spacing, du, stride, n0 = (
-                np.compress(keep, part, axis=-1) for part in (t0, u0, base, spacing, du, stride, n0)
+                part.compress(keep, axis=-1) for part in (t0, u0, base, spacing, du, stride, n0)
             )
             t0 += LOOKAHEAD * spacing
             u0 += LOOKAHEAD * du

@@ -241,8 +241,10 @@ class MazeVectorEnv(VectorEnv):
             return actions * robot.max_wheel_speed
         speed = actions[:, 0] * robot.max_wheel_speed
         half_difference = 0.5 * actions[:, 1] * self.top_turn_rate * robot.wheelbase
-        wheels = np.column_stack([speed - half_difference, speed + half_difference])
-        fastest = np.abs(wheels).max(axis=1, keepdims=True)
+        wheels = np.empty((len(actions), 2))
+        np.subtract(speed, half_difference, out=wheels[:, 0])
+        np.add(speed, half_difference, out=wheels[:, 1])
+        fastest = np.maximum(np.abs(wheels[:, 0]), np.abs(wheels[:, 1]))[:, None]
         return wheels * np.minimum(1.0, robot.max_wheel_speed / np.maximum(fastest, 1e-12))
 
     def _drive(self, speeds: np.ndarray, slip: np.ndarray) -> np.ndarray:
@@ -266,7 +268,9 @@ class MazeVectorEnv(VectorEnv):
         np.cumsum(headings, axis=0, out=headings)
         middle = headings[:-1] + 0.5 * turn
         forward = 0.5 * (travel[0] + travel[1])
-        step_x, step_y = forward * np.cos(middle), forward * np.sin(middle)  # (steps, E) m
+        moves = np.empty((2, steps, self.num_envs))  # (x, y; steps, E) m
+        np.multiply(forward, np.cos(middle), out=moves[0])
+        np.multiply(forward, np.sin(middle), out=moves[1])
         start = self.poses[:, :2].T  # (2, E) m
         reach = robot.body_radius + 2 * robot.max_wheel_speed * dt * steps  # with room for slip
         boxes = self._grids().boxes_near(start[0], start[1], reach)  # (4, B, E)
@@ -274,19 +278,19 @@ class MazeVectorEnv(VectorEnv):
         # step-by-step loop below; a robot that overlaps no box at any of them never touches a wall.
         path = np.empty((2, steps + 1, self.num_envs))
         path[:, 0] = start
-        path[0, 1:], path[1, 1:] = step_x, step_y
+        path[:, 1:] = moves
         np.cumsum(path, axis=1, out=path)
         point = path[:, None, 1:]  # (2, 1, steps, E)
         gap = point - np.minimum(np.maximum(point, boxes[:2, :, None]), boxes[2:, :, None])
         squared = gap[0] * gap[0] + gap[1] * gap[1]  # (B, steps, E)
         overlaps = squared.min(axis=0) < robot.body_radius * robot.body_radius  # (steps, E)
-        touching = np.flatnonzero(overlaps.any(axis=0))
+        touching = overlaps.any(axis=0).nonzero()[0]
         position = path[:, -1].copy()
         touched = np.zeros(self.num_envs, dtype=bool)
         if len(touching):  # step by step from each one's first overlap on, pushed out of the walls
             firsts = overlaps[:, touching].argmax(axis=0).tolist()
             starts = path[:, :, touching].T.tolist()  # (E', steps + 1, 2)
-            moves = np.stack([step_x[:, touching], step_y[:, touching]]).T.tolist()  # (E', steps, 2)
+            moving = moves[:, :, touching].T.tolist()  # (E', steps, 2)
             near = boxes[:, :, touching].T.tolist()  # (E', B, 4)
             # The boxes within ``reach`` of the wall-free path: being pushed out of walls moves a
             # robot less than its path's length, so it can overlap no other.
@@ -294,9 +298,10 @@ class MazeVectorEnv(VectorEnv):
             for k, env in enumerate(touching.tolist()):
                 first, solid = firsts[k], [box for box, kept in zip(near[k], close[k]) if kept]
                 x, y = starts[k][first]
-                x, y, touched[env] = slide(x, y, moves[k][first:], robot.body_radius, solid)
+                x, y, touched[env] = slide(x, y, moving[k][first:], robot.body_radius, solid)
                 position[0, env], position[1, env] = x, y
-        self.poses = np.column_stack([position.T, wrap_angle(headings[-1])])
+        self.poses = np.empty((self.num_envs, 3))
+        self.poses[:, :2], self.poses[:, 2] = position.T, wrap_angle(headings[-1])
         return touched
 
     def _read_odometry(self) -> np.ndarray:
@@ -304,7 +309,9 @@ class MazeVectorEnv(VectorEnv):
         steps = np.floor(self._commanded / self.metres_per_step + 1e-9).astype(np.int64)
         left, right = ((steps - self._reported) * self.metres_per_step).T
         self._reported = steps
-        return np.column_stack([0.5 * (left + right), (right - left) / self.config.robot.wheelbase])
+        odometry = np.empty((self.num_envs, 2))
+        odometry[:, 0], odometry[:, 1] = 0.5 * (left + right), (right - left) / self.config.robot.wheelbase
+        return odometry
 
     # -- sensing ------------------------------------------------------------------------------
     def _observe(self, envs: np.ndarray, noise: np.ndarray, uniforms: np.ndarray):
@@ -324,17 +331,16 @@ class MazeVectorEnv(VectorEnv):
         ranges, edges, along = grids.cast_edges(envs, sensor_x, sensor_y, heading, self.bearings, laser.max_range)
         hit = np.isfinite(ranges)
         noisy = np.multiply(noise, laser.range_noise_std, out=self._noise[: len(envs)])
-        noisy = np.add(ranges, noisy, out=self._noisy[: len(envs)])
-        valid = hit & (noisy >= laser.min_range) & (noisy <= laser.max_range)
+        noisy = np.add(ranges, noisy, out=self._noisy[: len(envs)])  # inf where no wall: not valid
+        valid = noisy <= laser.max_range
+        valid &= noisy >= laser.min_range
         if laser.dropout:
             valid &= uniforms >= laser.dropout
-        if len(envs) == self.num_envs:  # every env (envs in order): in place
-            self.last_scan.fill(0.0)
-            np.copyto(self.last_scan, noisy, casting="same_kind", where=valid)
-        else:
-            self.last_scan[envs] = np.where(valid, noisy, 0.0)
+        self.last_scan[slice(None) if len(envs) == self.num_envs else envs] = np.where(valid, noisy, 0.0)
         bins = (envs[:, None] * self.seen.shape[1] + grids.edge_bins(edges, along, WALL_SAMPLE_SPACING))[hit]
-        new = np.unique(bins[self._unseen.ravel()[bins]])
+        new = bins[self._unseen.ravel()[bins]]
+        if len(new) > 1:
+            new = np.unique(new)
         self.seen.ravel()[new] = True
         self._unseen.ravel()[new] = False
         newly_seen = np.bincount(new // self.seen.shape[1], minlength=self.num_envs)
