@@ -62,11 +62,13 @@ class MazeGrids:
 
     code_offsets: np.ndarray = field(init=False, repr=False)
     last_block: np.ndarray = field(init=False, repr=False)
+    flat_strides: np.ndarray = field(init=False, repr=False)
 
     def __post_init__(self):
         self.edges = np.concatenate([self.xs, self.ys])
         self.code_offsets = _code_offsets(self.solid.shape[2])
         self.last_block = np.array(self.solid.shape[1:])[:, None] - 1  # (2, 1) along y, along x
+        self.flat_strides = np.array([[1], [self.solid.shape[2]]], dtype=np.int32)  # (2, 1) along x, y
 
     @classmethod
     def like(cls, maze: Maze, count: int) -> MazeGrids:
@@ -364,8 +366,10 @@ class _Sensors:
         bits = self.ahead.view(np.int32)
         self.ahead_down, self.ahead_flip = bits[..., :1], bits[..., 1:] ^ bits[..., :1]  # (2, K, 1) each
         self.line = (_SENSE * lines).astype(np.int64)
-        i, j = grids.blocks_of(x, y)
-        inside = (i & j & 1).astype(bool)  # (K,) in a cell's interior, not in a wall band
+        # The block (j, i) a sensor stands in is line up - line down along each axis, in a cell's
+        # interior where those add up to 1 (in a wall band, 2).
+        j, i = (lines[..., 1] - lines[..., 0]).astype(np.int64)
+        inside = (lines[0, :, 0] + lines[0, :, 1] == 1) & (lines[1, :, 0] + lines[1, :, 1] == 1)  # (K,)
         block = envs * (height * width) + i * width + j
         # Per ray code: the block beside the cell the ray leaves it through; the post at that gap's
         # end (+1 along the axis crossed, a, +1 along the other, b), the neighbour cell's wall
@@ -380,8 +384,9 @@ class _Sensors:
         self.inside, self.envs = inside, envs
 
 
-#: The two senses along an axis: down, up.
+#: The two senses along an axis: down, up; and whether down.
 _SENSE = np.array([-1, 1])
+_DOWN = _SENSE < 0
 #: Per own-cell ray code ``4 across_x + 2 up_y + up_x`` (``_Sensors``): whether across x, and
 #: whether moving up along the axis crossed.
 _X_CODES = np.array([False] * 4 + [True] * 4)
@@ -436,7 +441,7 @@ class _BandCrossings:
         height, width = grids.solid.shape[1:]
         self.solid = grids.solid.view(np.uint8).ravel()
         self.thin = np.float32(grids.thickness / s)  # share of a cell's width a wall band takes
-        self.across = np.array([width, 1], dtype=np.int32)[:, None, None]
+        self.across = grids.flat_strides[::-1, :, None]  # (2, 1, 1): the other axis's
         sensor = rays // beams
         up = up.take(rays, axis=1)
         count = len(sensors.envs)
@@ -448,9 +453,9 @@ class _BandCrossings:
         rate = direction.take(rays, axis=1)[::-1].astype(np.float32)
         rate *= np.float32(1 / s)
         offset = ((sensors.origin[::-1] + half) / s).astype(np.float32).take(sensor, axis=1)
-        unit = np.array([[1], [width]], dtype=np.int32)  # flat stride of a block along x, along y
+        unit = grids.flat_strides  # (2, 1) flat stride of a block along x, along y
         start = sensors.envs[:, None] * (height * width) + 2 * sensors.line * unit[:, :, None]
-        start += np.array([width, 1])[:, None, None]  # band + 1 across
+        start += unit[::-1, :, None]  # band + 1 across
         # Crossing 0 on the axis a ray left its cell across is free (the cell's open side).
         inside = sensors.inside[sensor]
         across = across_x[rays]
@@ -458,7 +463,7 @@ class _BandCrossings:
         n0[0], n0[1] = inside & across, inside & ~across
         self.steps = (4 * up - 2).astype(np.int32)  # block edges a crossing: 2, down or up
         self.stride = self.steps * unit  # flat index steps a crossing
-        edges = 2 * sensors.line + (_SENSE < 0)  # block edge of the first band's near face
+        edges = 2 * sensors.line + _DOWN  # block edge of the first band's near face
         edges[1] += len(grids.xs)
         self.edge0 = edges.ravel().take(key)  # (2, M)
         self.rate = rate
