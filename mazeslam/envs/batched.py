@@ -51,6 +51,10 @@ class MazeGrids:
         xs: (2C+2,) block edges along x, metres; ``ys``: (2R+2,) along y.
         cell_size, thickness: metres.
         edges: ``xs`` then ``ys``.
+        face_tables: (E * cells + 1) tables of 8 ray codes by 3 cases, int32, per cell of each maze
+            (``_set_face_tables``): the wall face a ray leaving that cell meets there or in the
+            neighbour cell. Kept up to date by ``set``: change a maze through it, not ``solid``.
+        cells: cells per maze.
     """
 
     solid: np.ndarray
@@ -63,12 +67,19 @@ class MazeGrids:
     code_offsets: np.ndarray = field(init=False, repr=False)
     last_block: np.ndarray = field(init=False, repr=False)
     flat_strides: np.ndarray = field(init=False, repr=False)
+    face_tables: np.ndarray = field(init=False, repr=False)
+    cells: int = field(init=False, repr=False)
 
     def __post_init__(self):
         self.edges = np.concatenate([self.xs, self.ys])
         self.code_offsets = _code_offsets(self.solid.shape[2])
         self.last_block = np.array(self.solid.shape[1:])[:, None] - 1  # (2, 1) along y, along x
         self.flat_strides = np.array([[1], [self.solid.shape[2]]], dtype=np.int32)  # (2, 1) along x, y
+        count, height, width = self.solid.shape
+        self.cells = (height // 2) * (width // 2)  # per maze
+        self.face_tables = np.full((count * self.cells + 1) * _TABLE_ENTRIES, -1, dtype=np.int32)
+        for env in range(count):
+            self._set_face_tables(env)
 
     @classmethod
     def like(cls, maze: Maze, count: int) -> MazeGrids:
@@ -89,6 +100,28 @@ class MazeGrids:
         if not self.fits(maze):
             raise ValueError("every maze of a vector must have the same rows, cols, cell size and wall thickness")
         self.solid[env] = solid_blocks(maze)
+        self._set_face_tables(env)
+
+    def _set_face_tables(self, env: int) -> None:
+        """``face_tables`` of maze ``env``'s cells: per cell (row-major), ray code ``4 across_x + 2
+        up_y + up_x`` (a ray leaving the cell first across x, else y, moving up or down each axis)
+        and case (0: it next meets the neighbour cell's far wall, 1: its wall along the other axis,
+        2: the post at the gap's end), the block edge (an index into ``edges``) of the face it
+        meets: the cell's own if solid, else the one of the case if solid, else -1. One more
+        table, the last, is -1 throughout (for a sensor in a wall band)."""
+        height, width = self.solid.shape[1:]
+        row, col = np.divmod(np.arange(self.cells), width // 2)
+        i, j = 2 * row + 1, 2 * col + 1
+        block = env * (height * width) + i * width + j
+        # Per ray code: the block beside the cell the ray leaves it through; the post at that gap's
+        # end (+1 along the axis crossed, a, +1 along the other, b), the neighbour cell's wall
+        # along b (+2 along a, +1 along b) and its far wall along a (+3 along a), in blocks.
+        solid = self.solid.take(block[:, None, None] + self.code_offsets, mode="clip")  # (cells, 4, 8)
+        edges = np.where(_CODE_EDGE_X, j[:, None, None], i[:, None, None] + len(self.xs)) + _CODE_EDGE_STEP
+        faces = np.where(solid[:, _CASE_BLOCK], edges[:, _CASE_FACE], -1)  # (cells, 3, 8) per case
+        tables = np.where(solid[:, :1], edges[:, :1], faces).transpose(0, 2, 1)  # (cells, 8, 3)
+        size = self.cells * _TABLE_ENTRIES
+        self.face_tables[env * size : (env + 1) * size] = tables.ravel()
 
     def blocks_of(self, x: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Block indices (i, j) of the points (x, y) (metres), each clipped to the grid."""
@@ -120,7 +153,7 @@ class MazeGrids:
 
         A ray enters a solid block only where it enters a wall band (cell interiors are free), so
         only its crossings into the bands ``k s -+ t/2`` are looked at. First, from its first
-        crossing on each axis and one lookup in a per-sensor table (``_Sensors.table``), a ray that
+        crossing on each axis and one lookup in its cell's table (``MazeGrids.face_tables``), a ray that
         leaves its sensor's cell through a wall (about half), or through the open side into the
         neighbour cell and then meets the post at the gap's end, the neighbour's side wall or its
         far wall (about a third); then the others' crossings, ``LOOKAHEAD`` per axis at a time
@@ -153,12 +186,13 @@ class MazeGrids:
         inverse_a = np.where(across_x, inverse[0], inverse[1])
         case = far < inverse_a * np.float32(self.thickness) + near  # b entered within the gap (post)
         case = case.view(np.uint8) + (far <= inverse_a * np.float32(self.cell_size) + near)  # + before the far wall
+        ray_code = across_x.view(np.uint8) << 2 | up[1].view(np.uint8) << 1 | up[0].view(np.uint8)
+        ray_code *= 3
+        ray_code += case
         code = work.code
-        np.copyto(code, work.code_base)
-        code += across_x.view(np.uint8) << 2 | up[1].view(np.uint8) << 1 | up[0].view(np.uint8)
-        code *= 3
-        code += case
-        edge = sensors.table.take(code)
+        np.copyto(code.reshape(count, beams), sensors.table[:, None])
+        code += ray_code
+        edge = self.face_tables.take(code)
         missed = np.zeros(count * beams, dtype=bool)
         rest = (edge < 0).nonzero()[0]
         if len(rest):
@@ -330,8 +364,7 @@ class _Workspace:
         self.direction = np.empty((2, count, beams))
         self.inverse = np.empty((2, count * beams), dtype=np.float32)
         self.first = np.empty((2, count * beams), dtype=np.float32)
-        self.code_base = np.repeat(np.arange(0, 8 * count, 8, dtype=np.int32), beams)
-        self.code = np.empty_like(self.code_base)
+        self.code = np.empty(count * beams, dtype=np.int32)
         self.rays = np.arange(count * beams, dtype=np.int32)
         self.both_axes = count * beams + 2 * self.rays  # an index into (2, R) arrays plus its other axis'
         self.normal_index, self.sideways_index = np.empty((2, count * beams), dtype=np.int32)
@@ -347,12 +380,8 @@ class _Sensors:
         ahead_down, ahead_flip: (2, K, 1) int32, the bit patterns of ahead down, and of ahead
             down xor ahead up.
         line: (2, K, 2) that line's index.
-        table: (K * 8 * 3,) int32 per sensor, ray code ``4 across_x + 2 up_y + up_x`` (a ray
-            leaving the sensor's cell first across x, else y, moving up or down each axis) and case
-            (0: it next meets the neighbour cell's far wall, 1: its wall along the other axis, 2:
-            the post at the gap's end): the block edge (an index into ``MazeGrids.edges``) of the
-            face it meets, the own cell's if solid, else the one of the case if solid, else -1
-            (only for a sensor inside a cell, not in a wall band: -1 throughout).
+        table: (K,) where the sensor's cell's table starts in ``MazeGrids.face_tables`` (the
+            last, -1 throughout, for a sensor in a wall band).
     """
 
     def __init__(self, grids: MazeGrids, envs: np.ndarray, x: np.ndarray, y: np.ndarray):
@@ -370,17 +399,8 @@ class _Sensors:
         # interior where those add up to 1 (in a wall band, 2).
         j, i = (lines[..., 1] - lines[..., 0]).astype(np.int64)
         inside = (lines[0, :, 0] + lines[0, :, 1] == 1) & (lines[1, :, 0] + lines[1, :, 1] == 1)  # (K,)
-        block = envs * (height * width) + i * width + j
-        # Per ray code: the block beside the cell the ray leaves it through; the post at that gap's
-        # end (+1 along the axis crossed, a, +1 along the other, b), the neighbour cell's wall
-        # along b (+2 along a, +1 along b) and its far wall along a (+3 along a), in blocks.
-        solid = grids.solid.take(block[:, None, None] + grids.code_offsets, mode="clip")  # (K, 4, 8)
-        solid &= inside[:, None, None]
-        edges = np.where(_CODE_EDGE_X, j[:, None, None], i[:, None, None] + len(grids.xs)) + _CODE_EDGE_STEP
-        # (K, 8, 3) per case (far, side, post): the own cell's face if solid, else the face met.
-        own, met = solid[:, :1], solid[:, _CASE_BLOCK]
-        faces = np.where(met, edges[:, _CASE_FACE], -1)
-        self.table = np.where(own, edges[:, :1], faces).transpose(0, 2, 1).astype(np.int32).ravel()
+        cell = envs * grids.cells + (i >> 1) * (width // 2) + (j >> 1)
+        self.table = np.where(inside, cell, len(grids.face_tables) // _TABLE_ENTRIES - 1) * _TABLE_ENTRIES
         self.inside, self.envs = inside, envs
 
 
@@ -397,8 +417,10 @@ _UP_B = np.where(_X_CODES, _CODE // 2 % 2, _CODE % 2)  # whether moving up along
 #: the step from the own cell's block index.
 _CODE_EDGE_X = np.stack([_X_CODES, ~_X_CODES, _X_CODES])
 _CODE_EDGE_STEP = np.stack([_UP_CODES, _UP_B, _UP_CODES + 2 * (2 * _UP_CODES - 1)])
-#: Per case of ``_Sensors.table`` (far, side, post): its block in ``_code_offsets`` and its face.
+#: Per case of ``MazeGrids.face_tables`` (far, side, post): its block in ``_code_offsets`` and its
+#: face; entries per cell (ray codes by cases).
 _CASE_BLOCK, _CASE_FACE = [3, 2, 1], [2, 1, 1]
+_TABLE_ENTRIES = 8 * 3
 
 
 def _code_offsets(width: int) -> np.ndarray:
