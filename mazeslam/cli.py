@@ -407,10 +407,11 @@ def slam(
         "association": association,
         "version": int(version) if version else None,
     }
-    # Started first, so that matplotlib loads on the other core while this one loads the filter and runs it.
-    with SideProcess(FIGURE_MODULES) as side:
-        from mazeslam.slam_command import run_slam_command
+    from mazeslam.slam_command import run_slam_command
 
+    # Forked once the filter's modules are loaded (none imported twice): matplotlib loads on the other
+    # core while this one reads the log and runs the filter.
+    with SideProcess(FIGURE_MODULES) as side:
         lines = run_slam_command(
             log_file,
             config_path,
