@@ -7,7 +7,8 @@ the family: laser odometry, FastSLAM 2.0, 100 particles) under ``--seeds`` filte
 the scans against the reference poses (gmapping's corrected poses: a reference, not ground truth;
 the log has no other pose to score against): the ATE of the wheel odometry, of the laser odometry
 alone and of FastSLAM (median and worst over the seeds), with and without SE(2) alignment;
-landmarks, run time, particles (results/table.md). Figures in docs/img/carmen/: the median seed's
+landmarks, run time, particles (results/table.md); per seed the ATE, aligned ATE and the relation
+metric (Kümmerle et al. 2009; results/seeds.csv). Figures in docs/img/carmen/: the median seed's
 map drawn over the scans, and its scans beside the picture of the map that comes with the log.
 """
 
@@ -28,6 +29,7 @@ import pandas as pd  # noqa: E402
 
 from mazeslam.evaluation import slam_report  # noqa: E402
 from mazeslam.evaluation.metrics import absolute_trajectory_error  # noqa: E402
+from mazeslam.evaluation.relations import BUILDING_RADIUS, relation_metric, spatial_relations  # noqa: E402
 from mazeslam.filters.motion import dead_reckoning  # noqa: E402
 from mazeslam.filters.scan_matching import LaserOdometry, laser_odometry  # noqa: E402
 from mazeslam.imports.carmen import import_carmen  # noqa: E402
@@ -60,19 +62,25 @@ def run_one(
     result = slam_on_run(run, config, progress=False, laser=laser)
     seconds = time.perf_counter() - began
     raw, aligned = ate(result.mean_poses[scans], reference[scans])
+    relations = relation_metric(
+        result.mean_poses[scans], reference[scans], spatial_relations(reference[scans], BUILDING_RADIUS)
+    )
     return {
         "seed": seed,
         "ate": raw,
         "aligned": aligned,
+        "rel_trans_m": relations["trans_mean"],
+        "rel_rot_deg": float(np.degrees(relations["rot_mean"])),
         "seconds": seconds,
         "landmarks": len(result.landmarks),
         "result": result,
     }
 
 
-def evaluate(name: str, seeds: int, out: Path) -> dict:
+def evaluate(name: str, seeds: int, out: Path) -> tuple[dict, list[dict]]:
     """Import one building, match its scans once, run every seed, draw the median seed's map; the
-    table row."""
+    table row and a row per seed (aligned ATE and the relation metric over the pairs of scans
+    within ``BUILDING_RADIUS`` of each other by the reference, for results/seeds.csv)."""
     course = out / f"{name}.log"
     import_carmen(DATA / f"{name}-corrected.log.gz", course)
     config = load_slam_config(CONFIG)
@@ -112,7 +120,8 @@ def evaluate(name: str, seeds: int, out: Path) -> dict:
     for suffix in (".log", ".truth.csv", ".map.json"):
         course.with_name(course.stem + suffix).unlink()
     print({k: round(v, 2) if isinstance(v, float) else v for k, v in row.items()}, flush=True)
-    return row
+    seed_rows = [{"log": name, **{key: value for key, value in run.items() if key != "result"}} for run in runs]
+    return row, seed_rows
 
 
 def beside_the_reference_picture(path: Path, points: np.ndarray, picture: Path, name: str) -> None:
@@ -140,8 +149,10 @@ def main():
     out.mkdir(exist_ok=True)
     FIGURES.mkdir(parents=True, exist_ok=True)
     with ProcessPoolExecutor(args.workers) as pool:
-        rows = list(pool.map(evaluate, LOGS, [args.seeds] * len(LOGS), [out] * len(LOGS)))
-    table = pd.DataFrame(rows)
+        results = list(pool.map(evaluate, LOGS, [args.seeds] * len(LOGS), [out] * len(LOGS)))
+    seeds = pd.DataFrame([seed_row for _, seed_rows in results for seed_row in seed_rows])
+    seeds.sort_values(["log", "seed"]).to_csv(out / "seeds.csv", index=False, float_format="%.4g")
+    table = pd.DataFrame([row for row, _ in results])
     markdown = table.to_markdown(index=False, floatfmt=".2f")
     (out / "table.md").write_text(markdown + "\n")
     print(markdown)

@@ -1,6 +1,11 @@
 """The grid filter (mazeslam.grid) on the 8 CARMEN building logs: aligned ATE at the scans against
-the logs' reference poses, wall-clock seconds against the log's duration, peak memory, and the best
+the logs' reference poses, the relation metric (Kümmerle et al. 2009, ``mazeslam.evaluation.relations``:
+mean translational and rotational error over every pair of scans whose reference positions are within
+``BUILDING_RADIUS`` = 3 m), wall-clock and CPU seconds against the log's duration, peak memory, and the best
 particle's map (map_server YAML + PGM + PNG) beside each log's own picture.
+
+The filter's settings are configs/carmen.toml's ``[grid]`` (and ``[scan_matching]`` for the laser
+odometry), as ``mazeslam slam LOG --config configs/carmen.toml`` runs them, with the seed replaced.
 
 Run: ``python experiments/carmen_grid/run.py [--seeds 0 1 2 3 4] [--logs aces csail ...] [--jobs 2]``.
 Each (log, seed) runs in its own process (one core each), so that its peak memory is its own.
@@ -13,6 +18,7 @@ particles' maps held together (``map_mb``, shared tiles once).
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import resource
 import tempfile
 import time
@@ -23,15 +29,30 @@ import numpy as np
 import pandas as pd
 
 from mazeslam.evaluation.metrics import absolute_trajectory_error
-from mazeslam.grid import GridSlamParams, run_grid_slam
+from mazeslam.evaluation.relations import BUILDING_RADIUS, relation_metric, spatial_relations
 from mazeslam.grid.map_io import grid_states, write_map
+from mazeslam.grid_command import grid_on_run
 from mazeslam.imports.carmen import import_carmen
 from mazeslam.loaded_run import load_run
 from mazeslam.sidecars import write_trajectory
+from mazeslam.slam import load_slam_config
 
 CARMEN = Path(__file__).resolve().parents[3] / "shared" / "data" / "carmen"
+CONFIG = Path(__file__).resolve().parents[2] / "configs" / "carmen.toml"
 RESULTS = Path(__file__).resolve().parent / "results"
 LOGS = ["aces", "csail", "edmonton", "fhw", "freiburg-079", "freiburg-101", "orebro", "seattle"]
+
+
+def relation_row(poses: np.ndarray, reference: np.ndarray) -> dict:
+    """The relation metric's columns for ``poses`` (S, 3) against the ``reference`` (S, 3) at the scans."""
+    metric = relation_metric(poses, reference, spatial_relations(reference, BUILDING_RADIUS))
+    return {
+        "relations": metric["relations"],
+        "rel_trans_m": metric["trans_mean"],
+        "rel_trans_std_m": metric["trans_std"],
+        "rel_rot_deg": np.degrees(metric["rot_mean"]),
+        "rel_rot_std_deg": np.degrees(metric["rot_std"]),
+    }
 
 
 def run_one(job: tuple[str, int]) -> dict:
@@ -43,7 +64,8 @@ def run_one(job: tuple[str, int]) -> dict:
         run = load_run(course)
     loaded_mb = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
     began, began_cpu = time.perf_counter(), time.process_time()
-    result = run_grid_slam(run.log, run.geometry, run.start_pose, GridSlamParams(seed=seed))
+    config = load_slam_config(CONFIG)
+    result = grid_on_run(run, dataclasses.replace(config, grid=dataclasses.replace(config.grid, seed=seed)))
     seconds, cpu_seconds = time.perf_counter() - began, time.process_time() - began_cpu
     reference = run.truth[result.scan_records]
     ate = absolute_trajectory_error(result.best_poses, reference, align=True)
@@ -59,6 +81,7 @@ def run_one(job: tuple[str, int]) -> dict:
         "processed": int(result.processed.sum()),
         "ate_rmse_m": ate["rmse"],
         "ate_max_m": ate["max"],
+        **relation_row(result.best_poses, reference),
         "seconds": seconds,
         "cpu_seconds": cpu_seconds,
         "log_seconds": run.log.duration,
