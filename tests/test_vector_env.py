@@ -101,6 +101,12 @@ def test_box_muller_makes_independent_standard_normals():
     assert stats.kstest(normals, "norm").pvalue > 0.01  # the standard normal's distribution
     assert abs(np.corrcoef(normals[:100_000], normals[100_000:])[0, 1]) < 0.01  # a pair's two halves
     assert abs(np.corrcoef(normals[:-1], normals[1:])[0, 1]) < 0.01  # neighbours
+    rows = np.random.default_rng(1).random((5, 6080), dtype=np.float32)
+    one_by_one = rows.copy()
+    for row in one_by_one:
+        box_muller(row)
+    box_muller(rows)  # all at once, as the vector env does when every env refills
+    np.testing.assert_array_equal(rows, one_by_one)
 
 
 def test_next_step_autoreset():

@@ -503,11 +503,8 @@ class _BandCrossings:
     def hits(self, max_range: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """(M,) arrays: whether each ray's hit is on a vertical face, the block edge of the face
         (an index into ``MazeGrids.edges``), whether it has none within ``max_range``."""
-        count = self.first.shape[-1]
-        best = np.full((2, count), np.inf, dtype=np.float32)  # nearest solid crossing per axis, m
-        crossing = np.zeros((2, count), dtype=np.int32)  # and its n
         lanes, last = _LANES, np.float32(LOOKAHEAD - 1)
-        active = np.arange(count)
+        active = None  # the rays looked at in this pass (None: all)
         t0, u0, base, spacing, du, stride, n0 = (
             self.t0,
             self.u0,
@@ -537,18 +534,18 @@ class _BandCrossings:
             found += t0  # (2, M') m, as lane * spacing + t0 for every lane
             found = np.where(first_solid > 0, found, np.float32(np.inf))
             lane += n0
-            if len(active) < count:
+            if active is None:  # per axis, the nearest solid crossing (m) and its n
+                best, crossing = found, lane
+            else:
                 nearer = found < best[:, active]
                 best[:, active] = np.where(nearer, found, best[:, active])
                 crossing[:, active] = np.where(nearer, lane, crossing[:, active])
-            else:
-                best, crossing = found, lane
             limit = (last * spacing + t0 + spacing).min(axis=0)  # nearest crossing not looked at
             done = (found.min(axis=0) < limit) | (limit > max_range)
             if done.all():
                 break
             keep = ~done
-            active = active[keep]
+            active = keep.nonzero()[0] if active is None else active[keep]
             t0, u0, base, spacing, du, stride, n0 = (
                 part.compress(keep, axis=-1) for part in (t0, u0, base, spacing, du, stride, n0)
             )

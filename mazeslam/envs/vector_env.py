@@ -211,8 +211,8 @@ class MazeVectorEnv(VectorEnv):
         ``DRAW_AHEAD`` steps at a time (uniforms made normals by ``box_muller``, then the dropout
         uniforms), so the draws of an env depend on its own history only."""
         empty = envs[self._drawn[envs] == DRAW_AHEAD]
-        for env in empty:
-            self._draw_ahead(env)
+        if len(empty):
+            self._draw_ahead(empty)
         rows = self._drawn[envs]
         self._drawn[envs] += 1
         which: slice | np.ndarray = envs
@@ -222,16 +222,21 @@ class MazeVectorEnv(VectorEnv):
         uniforms = self._no_dropouts[: len(normals)] if self._uniforms is None else self._uniforms[which, rows]
         return normals[:, : 2 * steps].reshape(-1, steps, 2), normals[:, 2 * steps :], uniforms
 
-    def _draw_ahead(self, env: int) -> None:
-        """Refill env ``env``'s ``DRAW_AHEAD`` steps of draws from its generator."""
-        rng = self.generators[env]
-        assert rng is not None  # reset first
-        normals = self._normals[env].reshape(-1)
-        rng.random(dtype=np.float32, out=normals)
-        box_muller(normals)
-        if self._uniforms is not None:
-            rng.random(dtype=np.float32, out=self._uniforms[env])
-        self._drawn[env] = 0
+    def _draw_ahead(self, envs: np.ndarray) -> None:
+        """Refill the listed envs' ``DRAW_AHEAD`` steps of draws, each from its own generator."""
+        normals = self._normals.reshape(self.num_envs, -1)  # per env, its uniforms then normals
+        for env in envs:
+            rng = self.generators[env]
+            assert rng is not None  # reset first
+            rng.random(dtype=np.float32, out=normals[env])
+            if self._uniforms is not None:
+                rng.random(dtype=np.float32, out=self._uniforms[env])
+        if len(envs) == self.num_envs:  # every env (in order): at once, each row as alone
+            box_muller(normals)
+        else:
+            for env in envs:
+                box_muller(normals[env])
+        self._drawn[envs] = 0
 
     # -- physics ------------------------------------------------------------------------------
     def _wheel_speeds(self, actions: np.ndarray) -> np.ndarray:
@@ -440,20 +445,21 @@ class SubEnv:
 
 
 def box_muller(uniforms: np.ndarray) -> None:
-    """Turn float32 ``uniforms`` in [0, 1) (1-D, even length) into independent standard normals, in
-    place: the first half's radii with the second half's angles (Box-Muller), a few vectorised
-    float32 calls, several times faster than numpy's float32 ziggurat sampler element for element.
-    Each element's result depends only on the array's length and its place in it."""
-    half = len(uniforms) // 2
-    radius = np.log1p(-uniforms[:half])  # 1 - u in (0, 1]: a finite log
+    """Turn float32 ``uniforms`` in [0, 1) (..., n), n even, into independent standard normals, in
+    place, row by row: a row's first half's radii with its second half's angles (Box-Muller), a few
+    vectorised float32 calls, several times faster than numpy's float32 ziggurat sampler element
+    for element. Each element's result depends only on its row's values (numpy's float32
+    functions give an element the same result at any place in a contiguous row)."""
+    half = uniforms.shape[-1] // 2
+    radius = np.log1p(-uniforms[..., :half])  # 1 - u in (0, 1]: a finite log
     radius *= -2
     np.sqrt(radius, out=radius)  # at most sqrt(2 * 24 ln 2) = 5.8 for float32 uniforms
-    angle = uniforms[half:]
+    angle = uniforms[..., half:]
     angle *= np.float32(2 * np.pi)
-    np.cos(angle, out=uniforms[:half])
-    np.sin(angle, out=uniforms[half:])
-    uniforms[:half] *= radius
-    uniforms[half:] *= radius
+    np.cos(angle, out=uniforms[..., :half])
+    np.sin(angle, out=uniforms[..., half:])
+    uniforms[..., :half] *= radius
+    uniforms[..., half:] *= radius
 
 
 def _env_seeds(seed: int | list[int | None] | None, count: int) -> list[int | None]:
