@@ -61,7 +61,9 @@ class LoopFastSLAM(FastSLAM):
                 self.means[p, j] += gain @ innovation
                 a = np.eye(2) - gain @ h
                 self.covariances[p, j] = a @ sigma @ a.T + gain @ noise[k] @ gain.T
-                self.log_weights[p] += -0.5 * d2 - LOG_TWO_PI - 0.5 * math.log(np.linalg.det(s))
+                self.log_weights[p] += self.params.likelihood_exponent * (
+                    -0.5 * d2 - LOG_TWO_PI - 0.5 * math.log(np.linalg.det(s))
+                )
                 self.seen[p, j] += 1
                 self.missed[p, j] = 0
                 matched_now.add(j)
@@ -81,7 +83,7 @@ class LoopFastSLAM(FastSLAM):
             self.seen[p, j] = 1
             self.missed[p, j] = 0
             matched_now.add(j)
-            self.log_weights[p] += (
+            self.log_weights[p] += self.params.likelihood_exponent * (
                 -0.5 * self.params.new_landmark_gate - LOG_TWO_PI - 0.5 * math.log(np.linalg.det(noise[k]))
             )
             report.new += 1

@@ -58,6 +58,7 @@ SETTING_LABELS = {
     "(m/sqrt(m), rad/sqrt(rad), rad/sqrt(m))",
     "observation_scale": "observation_scale\n(x the corners' calibrated covariance)",
     "inflation": "inflation (x every noise variance)",
+    "likelihood_exponent": "likelihood exponent (weights use each scan's likelihood to this power)",
     "range_noise_std": "laser range noise [m]",
 }
 

@@ -90,7 +90,7 @@ class CornerParams:
     max_end_spacing: float = 0.02
     end_face_std: float = 0.005
     mode: CornerMode = CornerMode.CORNERS
-    covariance_scale: dict[str, float] = field(default_factory=lambda: {"corner": 0.85, "wall_end": 5.5})
+    covariance_scale: dict[str, float] = field(default_factory=lambda: {"corner": 0.84, "wall_end": 5.5})
 
     def __post_init__(self):
         require(
