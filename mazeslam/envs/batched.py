@@ -477,18 +477,24 @@ class _BandCrossings:
         rate *= np.float32(1 / s)
         offset = ((sensors.origin[::-1] + half) / s).astype(np.float32).take(sensor, axis=1)
         unit = grids.flat_strides  # (2, 1) flat stride of a block along x, along y
-        start = sensors.envs[:, None] * (height * width) + 2 * sensors.line * unit[:, :, None]
-        start += unit[::-1, :, None]  # band + 1 across
+        # Per axis, sensor and sense: crossing 0's flat block index less its ``across * band``
+        # (band + 1 across), and the block edge of that band's near face.
+        tables = np.empty((2, 2, count, 2), dtype=np.int32)
+        np.multiply(sensors.line, 2 * unit[:, :, None], out=tables[0], casting="same_kind")
+        tables[0] += (sensors.envs * (height * width))[:, None]
+        tables[0] += unit[::-1, :, None]
+        np.multiply(sensors.line, 2, out=tables[1], casting="same_kind")
+        tables[1] += _DOWN
+        tables[1, 1] += len(grids.xs)
+        start, self.edge0 = tables.reshape(2, -1).take(key.ravel(), axis=1).reshape(2, 2, -1)  # (2, M) each
         # Crossing 0 on the axis a ray left its cell across is free (the cell's open side).
         inside = sensors.inside[sensor]
         across = across_x[rays]
         n0 = np.empty((2, len(rays)), dtype=np.int32)
         n0[0], n0[1] = inside & across, inside & ~across
-        self.steps = (4 * up - 2).astype(np.int32)  # block edges a crossing: 2, down or up
+        self.steps = np.multiply(up, 4, dtype=np.int32)
+        self.steps -= 2  # block edges a crossing: 2, down or up
         self.stride = self.steps * unit  # flat index steps a crossing
-        edges = 2 * sensors.line + _DOWN  # block edge of the first band's near face
-        edges[1] += len(grids.xs)
-        self.edge0 = edges.ravel().take(key)  # (2, M)
         self.rate = rate
         # Per pass: crossing n0 + l (l < LOOKAHEAD) of each axis at t0 + l spacing (m), with the
         # other coordinate u0 + l du (cells) and block index base + l stride + across band.
@@ -497,8 +503,8 @@ class _BandCrossings:
         self.t0 += self.first
         self.u0 = self.t0 * rate
         self.u0 += offset
-        self.base = start.ravel().take(key).astype(np.int32)
-        self.base += n0 * self.stride
+        self.base = n0 * self.stride
+        self.base += start
 
     def hits(self, max_range: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """(M,) arrays: whether each ray's hit is on a vertical face, the block edge of the face
