@@ -320,16 +320,6 @@ def corners(
         click.echo(f"json: {report.write_json(json_path)}")
 
 
-#: What ``slam``'s side process loads while the filter runs: what draws ``slam.png`` and exports the map.
-FIGURE_MODULES = (
-    "matplotlib.figure",
-    "matplotlib.backends.backend_agg",
-    "matplotlib.image",
-    "mazeslam.evaluation.slam_report",
-    "mazeslam.evaluation.map_export",
-)
-
-
 @main.command()
 @click.argument("log_file", type=click.Path(exists=True, dir_okay=False, path_type=Path))
 @click.option(
@@ -396,7 +386,6 @@ def slam(
 ):
     """Run FastSLAM on a course log: trajectory, map, the exercise's figure, and errors when truth exists."""
     from mazeslam.run_folders import SLAM_FILES, clear_outputs, default_out_dir
-    from mazeslam.side_process import SideProcess
 
     overrides = _geometry_overrides(first_beam_angle, beam_direction, mount_x)
     out_dir = prepare_output_folder(out_dir or default_out_dir(log_file, "slam"))
@@ -409,22 +398,19 @@ def slam(
     }
     from mazeslam.slam_command import run_slam_command
 
-    # Forked once the filter's modules are loaded (none imported twice): matplotlib loads on the other
-    # core while this one reads the log and runs the filter.
-    with SideProcess(FIGURE_MODULES) as side:
-        lines = run_slam_command(
-            log_file,
-            config_path,
-            out_dir,
-            filter_changes,
-            overrides,
-            animate,
-            not quiet,
-            live=live,
-            echo=lambda message: click.echo(message, err=True),
-            map_kind=map_kind,
-            side=side,
-        )
+    lines = run_slam_command(
+        log_file,
+        config_path,
+        out_dir,
+        filter_changes,
+        overrides,
+        animate,
+        not quiet,
+        live=live,
+        echo=lambda message: click.echo(message, err=True),
+        map_kind=map_kind,
+        side_process=True,
+    )
     click.echo("\n".join(lines))
     click.echo(f"results in {out_dir}")
 

@@ -21,6 +21,14 @@ from mazeslam.slam import MapKind, SlamConfig, SlamResult, load_slam_config, sla
 
 #: About how many frames ``--animate`` draws, whatever the log's length.
 ANIMATION_FRAMES = 150
+#: What the side process loads while the filter runs: what draws ``slam.png`` and exports the map.
+FIGURE_MODULES = (
+    "matplotlib.figure",
+    "matplotlib.backends.backend_agg",
+    "matplotlib.image",
+    "mazeslam.evaluation.slam_report",
+    "mazeslam.evaluation.map_export",
+)
 
 
 def run_slam_command(
@@ -34,7 +42,7 @@ def run_slam_command(
     live=False,
     echo=None,
     map_kind: str | None = None,
-    side: SideProcess | None = None,
+    side_process: bool = False,
 ) -> list[str]:
     """Run, write ``out_dir``/{trajectory.csv, best_trajectory.csv, map.json, slam.png, occupancy.pgm/.yaml/.png,
     landmarks.csv[, slam.gif]};
@@ -42,8 +50,9 @@ def run_slam_command(
     the ``[sensor]`` ones (None values: keep the config's). ``live``: draw the filter as it runs
     (``mazeslam.live``; its note when there is no window goes to ``echo`` at once, and to the lines).
     ``map_kind`` replaces ``[map] kind``; the particle count and seed go to the filter that runs.
-    ``side``: a ``SideProcess`` that has loaded matplotlib draws ``slam.png`` while this process scores
-    the run and writes the rest (without one, the figure is drawn here)."""
+    ``side_process``: corner FastSLAM's ``slam.png`` and map export are made by a ``SideProcess``
+    forked before the filter runs, which loads matplotlib meanwhile and draws while this process
+    scores the run and writes the rest (the command line's way; otherwise they are made here)."""
     config = load_slam_config(config_path)
     filter_changes = filter_changes or {}
     config = dataclasses.replace(
@@ -63,6 +72,15 @@ def run_slam_command(
             notes.append("--live draws corner FastSLAM only; the grid filter's map is in occupancy.png")
         lines = run_grid_command(run, config, Path(out_dir), progress, animate)
         return lines[:1] + notes + lines[1:]
+    with SideProcess(FIGURE_MODULES, fork=side_process) as side:
+        return _corner_fastslam(log_file, run, config, out_dir, notes, animate, progress, live, echo, side)
+
+
+def _corner_fastslam(
+    log_file, run: LoadedRun, config: SlamConfig, out_dir, notes: list[str], animate, progress, live, echo, side
+) -> list[str]:
+    """``run_slam_command`` for corner FastSLAM: the filter, its outputs and lines; ``side`` (a
+    ``SideProcess``) draws the figure and exports the map."""
     updates = int(run.log.is_scan.sum() + run.log.is_landmark.sum())
     every = max(1, updates // ANIMATION_FRAMES) if animate else 0  # frames for the GIF, at most ~ANIMATION_FRAMES
     view = None
@@ -95,7 +113,6 @@ def run_slam_command(
         title=f"{run.path.name}: FastSLAM, {config.fastslam.NPARTICLES} particles",
         truth_label=truth_label,
     )
-    side = side if side is not None else SideProcess.inline()
     side.start(slam_report.draw_and_export, out_dir, figure, run.log, run.geometry, *span)
     score = score_run(run, result, config.evaluation.match_radius)
     nis = nis_summary(result.nis)
