@@ -1,13 +1,14 @@
 """Corner FastSLAM on the 8 CARMEN building logs: import, map, score against the reference poses.
 
-    python experiments/carmen/run.py [--seeds 5] [--workers 2]   (about 15 minutes on 2 cores)
+    python experiments/carmen/run.py [--seeds 5] [--workers 2] [--logs aces ...]   (about 15 minutes on 2 cores)
 
 For each log: ``mazeslam import carmen`` then FastSLAM with configs/carmen.toml (one setting for
 the family: laser odometry, FastSLAM 2.0, 100 particles) under ``--seeds`` filter seeds. Scored at
 the scans against the reference poses (gmapping's corrected poses: a reference, not ground truth;
 the log has no other pose to score against): the ATE of the wheel odometry, of the laser odometry
 alone and of FastSLAM (median and worst over the seeds), with and without SE(2) alignment;
-landmarks, run time, particles (results/table.md); per seed the ATE, aligned ATE and the relation
+landmarks, run time, particles (results/table.csv and table.md; a run with --logs keeps the other
+logs' rows); per seed the ATE, aligned ATE and the relation
 metric (Kümmerle et al. 2009; results/seeds.csv). Figures in docs/img/carmen/: the median seed's
 map drawn over the scans, and its scans beside the picture of the map that comes with the log.
 """
@@ -140,19 +141,30 @@ def beside_the_reference_picture(path: Path, points: np.ndarray, picture: Path, 
     plt.close(fig)
 
 
+def merged(path: Path, table: pd.DataFrame, keys: list[str]) -> pd.DataFrame:
+    """``table`` with the rows of the CSV at ``path`` whose ``keys`` it does not hold (other logs)."""
+    if path.exists():
+        old = pd.read_csv(path)
+        keep = ~old.set_index(keys).index.isin(table.set_index(keys).index)
+        table = pd.concat([old[keep], table])
+    return table.sort_values(keys)
+
+
 def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--seeds", type=int, default=5, help="filter seeds per log")
     parser.add_argument("--workers", type=int, default=2, help="logs processed at once")
+    parser.add_argument("--logs", nargs="+", default=LOGS, choices=LOGS, help="logs to run (others' rows are kept)")
     args = parser.parse_args()
     out = HERE / "results"
     out.mkdir(exist_ok=True)
     FIGURES.mkdir(parents=True, exist_ok=True)
     with ProcessPoolExecutor(args.workers) as pool:
-        results = list(pool.map(evaluate, LOGS, [args.seeds] * len(LOGS), [out] * len(LOGS)))
-    seeds = pd.DataFrame([seed_row for _, seed_rows in results for seed_row in seed_rows])
-    seeds.sort_values(["log", "seed"]).to_csv(out / "seeds.csv", index=False, float_format="%.4g")
-    table = pd.DataFrame([row for row, _ in results])
+        results = list(pool.map(evaluate, args.logs, [args.seeds] * len(args.logs), [out] * len(args.logs)))
+    seeds = merged(out / "seeds.csv", pd.DataFrame([row for _, rows in results for row in rows]), ["log", "seed"])
+    seeds.to_csv(out / "seeds.csv", index=False, float_format="%.4g")
+    table = merged(out / "table.csv", pd.DataFrame([row for row, _ in results]), ["log"])
+    table.to_csv(out / "table.csv", index=False, float_format="%.4g")
     markdown = table.to_markdown(index=False, floatfmt=".2f")
     (out / "table.md").write_text(markdown + "\n")
     print(markdown)
