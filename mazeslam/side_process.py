@@ -1,8 +1,9 @@
 """A second process that loads slow modules while this one works, then runs one call for it.
 
-``mazeslam slam`` starts one before the filter: it imports matplotlib (about 0.4 s) on the other
-core while the filter runs, and draws ``slam.png`` while this process scores the run and writes the
-other outputs. It is forked (Linux), so it starts with everything already imported here; where fork
+``mazeslam slam`` starts one before corner FastSLAM runs: it imports matplotlib (about 0.3 s) on the
+other core while the filter runs, then draws ``slam.png`` and exports the map while this process
+scores the run and writes the other outputs. It is forked (Linux), so it starts with everything
+already imported here (fork it after the modules both need are loaded, or both load them); where fork
 is not the platform's way (macOS, Windows), or the process cannot start, calls run in this process
 instead, as they do when it has died. An error in the call is raised here, with the other process's
 traceback as its cause. The process ignores Ctrl-C (this one handles it) and ends with this one.
