@@ -2,7 +2,9 @@
 grid filter, the share of seeds within the issue's 0.3 m, the relation metric's median, the slowest
 run against the log's duration and the largest peak memory. Writes ``results/summary.md``, and
 ``results/both_kinds.md``: the grid filter beside corner FastSLAM (``experiments/carmen/results/seeds.csv``),
-both scored alike (quoted by docs/grid.md and docs/carmen.md).
+both scored alike (quoted by docs/grid.md and docs/carmen.md). With ``results/table_before.csv`` (the
+table of the code before issue 17's second round, commit 93d0b0c), ``results/before_after.md``: the
+aligned ATE of the same (log, seed) runs before and after.
 
     python experiments/carmen_grid/summary.py
 """
@@ -15,6 +17,7 @@ import pandas as pd
 
 RESULTS = Path(__file__).resolve().parent / "results"
 CORNERS = Path(__file__).resolve().parents[1] / "carmen" / "results" / "seeds.csv"
+BEFORE = RESULTS / "table_before.csv"
 TARGET = 0.3  # m: issue 17's bound on the worst seed's aligned ATE
 
 
@@ -53,18 +56,57 @@ def main() -> None:
     print(text)
     if CORNERS.exists():
         corners = per_log(pd.read_csv(CORNERS), "aligned", "rel_trans_m", "rel_rot_deg")
-        both = pd.concat(
-            {"corner FastSLAM (100 particles)": corners, "grid filter (30 particles)": summary.iloc[:, :6]}, axis=1
+        both = pd.DataFrame(
+            {
+                "corner FastSLAM: aligned ATE median / worst [m]": pair(corners, "ATE median [m]", "ATE worst [m]"),
+                "grid filter: aligned ATE median / worst [m]": pair(summary, "ATE median [m]", "ATE worst [m]"),
+                f"grid filter: seeds within {TARGET} m": summary[f"within {TARGET} m"],
+                "corner FastSLAM: relation error [m] / [deg]": pair(
+                    corners, "relation trans [m]", "relation rot [deg]"
+                ),
+                "grid filter: relation error [m] / [deg]": pair(summary, "relation trans [m]", "relation rot [deg]"),
+            }
         )
-        both.columns = [f"{kind}: {column}" for kind, column in both.columns]
         text = (
-            "Both map kinds on the CARMEN logs, scored alike at the scans against the logs' reference poses: "
-            "aligned ATE (median and worst over the filter seeds) and the relation metric (median over the "
-            "seeds). Corner FastSLAM scores its weighted-mean path (experiments/carmen), the grid filter its "
-            "best particle's path (experiments/carmen_grid).\n\n" + both.to_markdown(floatfmt=".3g") + "\n"
+            "Both map kinds on the CARMEN logs (corner FastSLAM: 100 particles, experiments/carmen; grid filter: "
+            "30 particles, experiments/carmen_grid), scored alike at the scans against the logs' reference poses: "
+            "aligned ATE, median and worst over the filter seeds, and the relation metric (mean translational / "
+            "rotational error over the pairs of scans within 3 m by the reference), median over the seeds. "
+            "Corner FastSLAM scores its weighted-mean path, the grid filter its best particle's path.\n\n"
+            + both.to_markdown()
+            + "\n"
         )
         (RESULTS / "both_kinds.md").write_text(text)
         print(text)
+    if BEFORE.exists():
+        before_after(table, pd.read_csv(BEFORE))
+
+
+def before_after(after: pd.DataFrame, before: pd.DataFrame) -> None:
+    """Aligned ATE of the (log, seed) runs in both tables, before and after: results/before_after.md."""
+    both = before.merge(after, on=["log", "seed"], suffixes=(" before", " after"))
+    grouped = both.groupby("log")
+    rows = pd.DataFrame(
+        {
+            "seeds": grouped["seed"].apply(lambda seeds: " ".join(str(s) for s in sorted(seeds))),
+            "before: ATE per seed [m]": grouped["ate_rmse_m before"].apply(lambda v: " ".join(f"{x:.3g}" for x in v)),
+            "after: ATE per seed [m]": grouped["ate_rmse_m after"].apply(lambda v: " ".join(f"{x:.3g}" for x in v)),
+            "before: worst [m]": grouped["ate_rmse_m before"].max(),
+            "after: worst [m]": grouped["ate_rmse_m after"].max(),
+        }
+    )
+    text = (
+        "Grid filter, aligned ATE of the best path against the reference, the same filter seeds before "
+        "(table_before.csv: map correction on, best particle by the tempered weights) and after (table.csv: "
+        "map correction off, best particle by the summed log likelihood).\n\n" + rows.to_markdown(floatfmt=".3g") + "\n"
+    )
+    (RESULTS / "before_after.md").write_text(text)
+    print(text)
+
+
+def pair(table: pd.DataFrame, first: str, second: str) -> pd.Series:
+    """Two columns of ``table`` as one of "first / second" strings, 3 significant digits each."""
+    return table[first].map("{:.3g}".format) + " / " + table[second].map("{:.3g}".format)
 
 
 if __name__ == "__main__":
