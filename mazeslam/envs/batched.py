@@ -7,8 +7,9 @@ blocks sharing the block edges ``xs`` (2C+2,) and ``ys`` (2R+2,), metres. On the
   solid block where it enters a wall band (cell interiors are free), and its entries into the bands
   along each axis are evenly spaced along it. Most rays meet a wall of their sensor's cell or of
   the neighbour cell they enter through an open side: those are settled from their first crossings
-  and per-sensor tables of the blocks around (``_Sensors``); the others look at a few crossings per
-  pass, in numpy arrays, until each has met a wall or passed ``max_range`` (``_BandCrossings``).
+  and per-cell tables made when a maze is set (``MazeGrids.face_tables``); the others look at a
+  few crossings per pass, in numpy arrays, until each has met a wall or passed ``max_range``
+  (``_BandCrossings``).
   Exact for the maze's axis-aligned thick walls, and cheap, since a ray in a maze meets a wall
   within few cells.
 * ``slide``: a robot disc driven step by step and pushed out of the solid blocks it overlaps,
@@ -433,7 +434,7 @@ def _code_offsets(width: int) -> np.ndarray:
 
 
 class _BandCrossings:
-    """The rays of one ``MazeGrids.cast_edges`` not settled in their sensor's cell, and their crossings
+    """The rays of one ``MazeGrids.cast_edges`` not settled by the cell tables, and their crossings
     into wall bands.
 
     Along each axis a ray enters the wall band of grid line k (``k s -+ t/2``) at
@@ -442,17 +443,18 @@ class _BandCrossings:
     lies in. The first solid block entered on either axis is the hit (x first on a tie), certain once
     no crossing not yet looked at lies nearer. The distances here are float32 (to about 1e-7 m),
     enough to tell which face a ray meets (``MazeGrids.cast_edges`` then measures the distance to it
-    exactly); every ray's are computed alike (from n, never from an earlier pass), so a ray's hit
-    does not depend on the others cast with it.
+    exactly); every ray's are computed alike (the same operations whatever else is cast with it),
+    so a ray's hit does not depend on the others cast with it.
 
-    Per axis a (0: x, 1: y) and ray, ``floats[:, a]`` (4, 2, M) float32 holds ``first``,
-    ``spacing`` (m), ``offset`` and ``rate``; ``ints[:, a]`` (3, 2, M) int32 ``start``,
-    ``stride`` and ``n0``: the flat index (into ``solid``) of crossing n's block is ``start + n *
-    stride + across * band``, ``across`` the flat stride of the other axis (2C+1 or 1) and ``band =
-    floor(u) + floor(u - t/s)`` (+ 1 in ``start``) for ``u = offset + t * rate``, the other
-    coordinate at the crossing in cells, shifted by t/2; n0 the first crossing not known free. A
-    crossing past the maze's outer wall may index any block: it lies beyond a solid crossing of
-    the same ray (the outer wall is closed), and is never taken for the hit.
+    Per axis a (0: x, 1: y) and ray, (2, M) arrays: ``first`` and ``spacing`` (m, float32),
+    ``rate`` (the other coordinate's change in cells per m, float32), ``n0`` (the first crossing
+    not known free), ``t0`` and ``u0`` (crossing n0's distance, m, and other coordinate, cells,
+    shifted by t/2), ``base`` and ``stride`` (int32: the flat index into ``solid`` of crossing n0 +
+    l's block is ``base + l * stride + across * band``, ``across`` the flat stride of the other
+    axis, 2C+1 or 1, and ``band = floor(u) + floor(u - t/s)`` for that crossing's u), ``steps`` and
+    ``edge0`` (crossing n's block edge is ``edge0 + n * steps``). A crossing past the maze's outer
+    wall may index any block: it lies beyond a solid crossing of the same ray (the outer wall is
+    closed), and is never taken for the hit.
     """
 
     def __init__(self, grids, sensors, rays, beams, direction, up, inverse, first, across_x):
