@@ -5,7 +5,7 @@
 The default simulated run (seed 0) is replayed through FastSLAM 1.0 (the exercise's version; FastSLAM
 2.0, the default, draws no pose until a scan returns, so its particles do not spread while blind) with
 1000 particles and otherwise default settings (the measured noise, inflation 1, likelihood_exponent
-0.25). The filter
+0.15). The filter
 sees every scan until ``BLIND_FROM`` seconds, then none (the laser is "switched off") until
 ``BLIND_UNTIL``, then every scan again. During the blind stretch it records the particle cloud:
 the standard deviations along its principal axes (x, y) and of the heading, against the distance
