@@ -24,13 +24,18 @@ import pandas as pd
 
 from mazeslam import simulate
 from mazeslam.evaluation.consistency import map_orientation_spread
+from mazeslam.filters.fastslam import FastSLAMParams
 from mazeslam.geometry import wrap_angle
 from mazeslam.loaded_run import load_run
 from mazeslam.slam import SlamConfig, slam_on_run
 
 HERE = Path(__file__).resolve().parent
 #: (particles, likelihood_exponent): the default, the default without the consistency margin, 1000 particles.
-SETTINGS = [(100, 0.25), (100, 1.0), (1000, 0.25)]
+SETTINGS = [
+    (100, FastSLAMParams.likelihood_exponent),
+    (100, 1.0),
+    (1000, FastSLAMParams.likelihood_exponent),
+]
 
 
 def block_nees(errors: np.ndarray, covariances: np.ndarray, axes: list[int]) -> np.ndarray:
