@@ -116,6 +116,7 @@ def _corner_fastslam(
     side.start(slam_report.draw_and_export, out_dir, figure, run.log, run.geometry, *span)
     score = score_run(run, result, config.evaluation.match_radius)
     nis = nis_summary(result.nis)
+    nis_by_kind = {kind: nis_summary(values) for kind, values in sorted(result.nis_by_kind().items())}
     line_numbers = run.log.line_numbers
     assert line_numbers is not None  # the log was read from a file: each record has its line
     extra = {
@@ -125,10 +126,11 @@ def _corner_fastslam(
         "parameters": dataclasses.asdict(config),
         "consistency": slam_report.consistency(result),
         "nis": nis,
+        "nis_by_kind": nis_by_kind,
         "resampled_fraction": result.resampled_fraction,
         "dropped_odometry_lines": [int(line_numbers[r.index]) for r in result.dropped_odometry],
     }
-    lines += _uncertainty_lines(nis, score.nees_summary if score is not None else None)
+    lines += _uncertainty_lines(nis, score.nees_summary if score is not None else None, nis_by_kind)
     if run.log.n_beams:
         placed_by = {"mean path": result.mean_poses, "best particle": result.best_poses}
         sharpness = paths_sharpness(run, placed_by, config.odometry.jump_tolerance, *span)
@@ -220,8 +222,9 @@ def _given_convention_warning(run: LoadedRun, config: SlamConfig) -> str | None:
     )
 
 
-def _uncertainty_lines(nis: dict, nees: dict | None) -> list[str]:
-    """Is the stated uncertainty right: NIS always, NEES with truth, and what they mean."""
+def _uncertainty_lines(nis: dict, nees: dict | None, nis_by_kind: dict[str, dict]) -> list[str]:
+    """Is the stated uncertainty right: NIS always (with its mean per kind of observation when there
+    are several kinds: which part of the observation model is off), NEES with truth, and what they mean."""
 
     def described(summary: dict, bound: float, consistent: int) -> str:
         if not summary["count"]:
@@ -234,7 +237,15 @@ def _uncertainty_lines(nis: dict, nees: dict | None) -> list[str]:
     line = f"Uncertainty: NIS of {nis['count']} associated observations {described(nis, OBSERVATION_BOUND_95, 2)}"
     if nees is not None:
         line += f"; pose NEES {described(nees, POSE_BOUND_95, 3)}"
-    return [line, "  " + EXPLANATION]
+    lines = [line]
+    if len(nis_by_kind) > 1:
+        kinds = ", ".join(
+            f"{kind} {summary['mean']:.2f} ({summary['count']})"
+            for kind, summary in nis_by_kind.items()
+            if summary["count"]
+        )
+        lines.append(f"  NIS mean by kind of observation (count): {kinds}")
+    return [*lines, "  " + EXPLANATION]
 
 
 def _score_lines(run: LoadedRun, result: SlamResult, score, match_radius: float) -> list[str]:

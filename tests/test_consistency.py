@@ -92,6 +92,12 @@ def test_the_slam_command_writes_strict_json_and_reports_consistency(default_run
 
     document = json.loads((tmp_path / "out" / "map.json").read_text(), parse_constant=refuse)
     assert document["nis"]["count"] > 0 and 0 <= document["nees"]["inside_95"] <= 1
+    # NIS per kind of observation: every associated observation in exactly one kind.
+    by_kind = document["nis_by_kind"]
+    assert set(by_kind) <= {"corner", "wall_end"}
+    assert sum(summary["count"] for summary in by_kind.values()) == document["nis"]["count"]
+    if len(by_kind) > 1:
+        assert "NIS mean by kind of observation" in text
     _, _, covariances = sidecars.read_trajectory(tmp_path / "out" / "trajectory.csv")
     assert np.all(np.linalg.eigvalsh(covariances[1:]) >= -1e-12)
 
