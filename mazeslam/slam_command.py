@@ -239,11 +239,7 @@ def _uncertainty_lines(nis: dict, nees: dict | None, nis_by_kind: dict[str, dict
         line += f"; pose NEES {described(nees, POSE_BOUND_95, 3)}"
     lines = [line]
     if len(nis_by_kind) > 1:
-        kinds = ", ".join(
-            f"{kind} {summary['mean']:.2f} ({summary['count']})"
-            for kind, summary in nis_by_kind.items()
-            if summary["count"]
-        )
+        kinds = ", ".join(f"{kind} {summary['mean']:.2f} ({summary['count']})" for kind, summary in nis_by_kind.items())
         lines.append(f"  NIS mean by kind of observation (count): {kinds}")
     return [*lines, "  " + EXPLANATION]
 

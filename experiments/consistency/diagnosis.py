@@ -24,6 +24,7 @@ import pandas as pd
 
 from mazeslam import simulate
 from mazeslam.evaluation.consistency import map_orientation_spread
+from mazeslam.evaluation.metrics import normalized_estimation_error
 from mazeslam.filters.fastslam import FastSLAMParams
 from mazeslam.geometry import wrap_angle
 from mazeslam.loaded_run import load_run
@@ -39,7 +40,8 @@ SETTINGS = [
 
 
 def block_nees(errors: np.ndarray, covariances: np.ndarray, axes: list[int]) -> np.ndarray:
-    """(R,) NEES of the ``axes`` components of ``errors`` (R, 3) under that block of ``covariances`` (R, 3, 3)."""
+    """(R,) NEES of the ``axes`` components of ``errors`` (R, 3) under that block of ``covariances`` (R, 3, 3)
+    (the position or the heading alone; the whole pose is ``metrics.normalized_estimation_error``)."""
     e = errors[:, axes]
     block = covariances[:, axes][:, :, axes]
     return np.einsum("ri,rij,rj->r", e, np.linalg.pinv(block), e)
@@ -75,7 +77,9 @@ def one_seed(seed: int) -> list[dict]:
                     f"nis_{kind}": float(groups[kind].mean()) if kind in groups else None
                     for kind in ("corner", "wall_end")
                 },
-                "nees_median": float(np.median(block_nees(errors, result.pose_covariances, [0, 1, 2])[moved])),
+                "nees_median": float(
+                    np.median(normalized_estimation_error(result.mean_poses, result.pose_covariances, run.truth)[moved])
+                ),
                 "position_nees_median": float(np.median(block_nees(errors, result.pose_covariances, [0, 1])[moved])),
                 "heading_nees_median": float(np.median(block_nees(errors, result.pose_covariances, [2])[moved])),
                 "map_orientation_spread_deg": math.degrees(
