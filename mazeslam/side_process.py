@@ -15,9 +15,11 @@ import importlib
 import multiprocessing
 import signal
 import sys
+import threading
 import traceback
 from collections.abc import Callable, Sequence
 from multiprocessing.connection import Connection
+from multiprocessing.reduction import ForkingPickler
 from typing import Any
 
 
@@ -33,6 +35,8 @@ class SideProcess:
         self._connection: Connection | None = None
         self._process = None
         self._pending: tuple[Callable, tuple, dict] | None = None
+        self._sender: threading.Thread | None = None
+        self._send_failed = False
         if not fork or not sys.platform.startswith("linux"):
             return
         try:
@@ -57,15 +61,27 @@ class SideProcess:
 
     def start(self, function: Callable, *args: Any, **kwargs: Any) -> None:
         """Hand ``function(*args, **kwargs)`` (picklable, module-level) to the other process; ``result``
-        returns its value. Without the other process, nothing runs until ``result``."""
+        returns its value. Without the other process, nothing runs until ``result``.
+
+        Returns at once: the call is pickled here (an error pickling it is raised here) and written
+        to the pipe by a thread, since a call larger than the pipe's buffer (a log's scans, the
+        figure's points) would otherwise hold this process until the other one reads it, which it
+        does only once it has loaded its modules."""
         if self._pending is not None:
             raise RuntimeError("SideProcess.start: the last call's result was not collected")
         self._pending = function, args, kwargs
         if self._connection is not None:
-            try:
-                self._connection.send(self._pending)
-            except (OSError, ValueError):  # it has died: the call runs here, in result()
-                self._stop()
+            payload = ForkingPickler.dumps(self._pending)
+            self._send_failed = False
+            self._sender = threading.Thread(target=self._send, args=(self._connection, payload), daemon=True)
+            self._sender.start()
+
+    def _send(self, connection: Connection, payload: bytes) -> None:
+        """Write a pickled call to the pipe (``start``'s thread)."""
+        try:
+            connection.send_bytes(payload)
+        except (OSError, ValueError):  # it has died: the call runs here, in result()
+            self._send_failed = True
 
     def result(self) -> Any:
         """The value of the call given to ``start`` (run here when the other process is not there)."""
@@ -73,6 +89,11 @@ class SideProcess:
             raise RuntimeError("SideProcess.result: no call was started")
         function, args, kwargs = self._pending
         self._pending = None
+        if self._sender is not None:
+            self._sender.join()
+            self._sender = None
+            if self._send_failed:
+                self._stop()
         if self._connection is None:
             return function(*args, **kwargs)
         try:
@@ -86,14 +107,17 @@ class SideProcess:
         return value
 
     def _stop(self) -> None:
-        if self._connection is not None:
-            self._connection.close()
-            self._connection = None
         if self._process is not None:
             if self._process.is_alive():
                 self._process.terminate()
             self._process.join()
             self._process = None
+        if self._sender is not None:  # its write ends with the process
+            self._sender.join()
+            self._sender = None
+        if self._connection is not None:
+            self._connection.close()
+            self._connection = None
 
     def __enter__(self) -> SideProcess:
         return self

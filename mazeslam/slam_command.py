@@ -138,7 +138,7 @@ def _corner_fastslam(
         extra["sharpness"] = {name: value.to_dict() for name, value in sharpness.items()}
     if score is not None:
         lines += _score_lines(run, result, score, config.evaluation.match_radius)
-        extra["ate"] = score.table.reset_index().to_dict(orient="records")
+        extra["ate"] = score.row_records()
         extra["map_error"] = score.map_errors
         extra["nees"] = score.nees_summary
         from mazeslam.smooth_command import optimum_columns, optimum_line  # the smoother: only with truth
@@ -254,7 +254,7 @@ def _score_lines(run: LoadedRun, result: SlamResult, score, match_radius: float)
     lines = [
         f"Errors against {run.truth_label}, {scored}: ATE [m] (aligned: after the best rigid motion), RPE over "
         f"{RPE_DISTANCE} m of path [m, rad], NEES of the mean pose (consistent: 3):",
-        score.table.to_markdown(floatfmt=".4f"),
+        score.markdown(),
     ]
     if not len(run.true_corners):
         return lines + ["Map: no true corners beside the log, the map is not scored"]

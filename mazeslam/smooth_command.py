@@ -37,7 +37,7 @@ from mazeslam.evaluation.metrics import (
     map_error,
     normalized_estimation_error,
 )
-from mazeslam.evaluation.scoring import DEAD_RECKONING, RunScore, error_table
+from mazeslam.evaluation.scoring import DEAD_RECKONING, RunScore, error_rows, error_table
 from mazeslam.evaluation.slam_report import _ellipse, scan_points_world
 from mazeslam.filters.corners import CornerExtractor
 from mazeslam.filters.motion import dead_reckoning
@@ -114,7 +114,7 @@ def optimum_columns(
     if optimum_poses is None:
         optimum_poses = known_optimum(run, config).poses
     poses, truth = optimum_poses[score.records], run.truth[score.records]
-    row = error_table({OPTIMUM: poses}, truth).loc[OPTIMUM]
+    row = error_rows({OPTIMUM: poses}, truth)[OPTIMUM]
     return {
         "optimum_ate_rmse": row["ate_rmse"],
         "optimum_ate_aligned_rmse": row["aligned_rmse"],

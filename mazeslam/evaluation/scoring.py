@@ -9,6 +9,7 @@ trajectory's frame).
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
@@ -38,16 +39,31 @@ FILTER_MEAN = "FastSLAM (mean)"
 DEAD_RECKONING = "dead reckoning"
 
 
+#: The columns of an error table, in order: ATE as estimated and aligned (m), RPE (m, rad), NEES.
+COLUMNS = (
+    "ate_rmse",
+    "ate_mean",
+    "ate_max",
+    "aligned_rmse",
+    "aligned_mean",
+    "aligned_max",
+    "rpe_trans_rmse",
+    "rpe_rot_rmse",
+)
+#: The NEES columns ``score_run`` adds (NaN but for the filter's mean).
+NEES_COLUMNS = ("mean_nees", "median_nees")
+
+
 @dataclass
 class RunScore:
     """A run's errors against the truth.
 
     Attributes:
         records: (S,) the record indices scored.
-        table: one row per estimator (dead reckoning, laser odometry when used, the filter's mean
-            and best particle): ATE (RMSE, mean, max; as estimated and ``aligned_*``, metres), RPE
-            over ``RPE_DISTANCE`` (translation m, rotation rad), ``mean_nees`` and
-            ``median_nees`` for the filter's mean.
+        rows: one row per estimator (dead reckoning, laser odometry when used, the filter's mean
+            and best particle), each ``COLUMNS`` (``error_rows``) and ``NEES_COLUMNS``: the
+            ``mean_nees`` and ``median_nees`` of the filter's mean (NaN in the other rows).
+            ``table`` is the same as a pandas DataFrame, ``markdown`` as printed.
         nees: (S,) the mean pose's NEES at each scored record (NaN where undefined);
             nees_summary its mean, median and share inside the 95 % bound (``consistency``).
         alignment: (3,) the rigid motion (x, y, theta) that best maps the mean path onto the truth.
@@ -56,41 +72,87 @@ class RunScore:
     """
 
     records: np.ndarray
-    table: pd.DataFrame
+    rows: dict[str, dict[str, float]]
     nees: np.ndarray
     nees_summary: dict
     alignment: np.ndarray
     map_errors: dict
 
+    @property
+    def table(self) -> pd.DataFrame:
+        """``rows`` as a DataFrame indexed by ``estimator`` (pandas loads on first use)."""
+        return _data_frame(self.rows)
+
     def ate(self, estimator: str = FILTER_MEAN, aligned: bool = False) -> float:
         """ATE RMSE of one estimator, metres."""
-        return float(self.table.loc[estimator, "aligned_rmse" if aligned else "ate_rmse"])
+        return float(self.rows[estimator]["aligned_rmse" if aligned else "ate_rmse"])
+
+    def markdown(self) -> str:
+        """The table as ``table.to_markdown(floatfmt=".4f")`` prints it (``markdown_table``)."""
+        return markdown_table(self.rows)
+
+    def row_records(self) -> list[dict]:
+        """One dict per estimator, its name under ``"estimator"`` then its columns (as
+        ``table.reset_index().to_dict(orient="records")``)."""
+        return [{"estimator": name, **row} for name, row in self.rows.items()]
 
 
-def error_table(estimates: dict[str, np.ndarray], truth: np.ndarray) -> pd.DataFrame:
+def error_rows(estimates: dict[str, np.ndarray], truth: np.ndarray) -> dict[str, dict[str, float]]:
     """ATE (RMSE, mean, max; without and with SE(2) alignment, metres) and RPE over
-    ``RPE_DISTANCE`` of path (translation m, rotation rad) of each named trajectory (S, 3)."""
-    import pandas as pd  # 0.5 s: loaded when a run is first scored, not with the module
-
-    rows = []
+    ``RPE_DISTANCE`` of path (translation m, rotation rad) of each named trajectory (S, 3): one
+    dict of ``COLUMNS`` per name. Plain floats: no pandas (0.3 s to import) on ``mazeslam slam``'s path."""
+    rows = {}
     for name, poses in estimates.items():
         raw = absolute_trajectory_error(poses, truth)
         aligned = absolute_trajectory_error(poses, truth, align=True)
         rpe = relative_pose_error(poses, truth, RPE_DISTANCE)
-        rows.append(
-            {
-                "estimator": name,
-                "ate_rmse": raw["rmse"],
-                "ate_mean": raw["mean"],
-                "ate_max": raw["max"],
-                "aligned_rmse": aligned["rmse"],
-                "aligned_mean": aligned["mean"],
-                "aligned_max": aligned["max"],
-                "rpe_trans_rmse": rpe["trans_rmse"],
-                "rpe_rot_rmse": rpe["rot_rmse"],
-            }
-        )
-    return pd.DataFrame(rows).set_index("estimator")
+        values = (raw["rmse"], raw["mean"], raw["max"], aligned["rmse"], aligned["mean"], aligned["max"])
+        rows[name] = dict(zip(COLUMNS, (*values, rpe["trans_rmse"], rpe["rot_rmse"])))
+    return rows
+
+
+def error_table(estimates: dict[str, np.ndarray], truth: np.ndarray) -> pd.DataFrame:
+    """``error_rows`` as a DataFrame indexed by ``estimator``, one row per trajectory."""
+    return _data_frame(error_rows(estimates, truth))
+
+
+def _data_frame(rows: dict[str, dict[str, float]]) -> pd.DataFrame:
+    import pandas as pd  # 0.3 s: loaded when a table is first asked for, not with the module
+
+    return pd.DataFrame([{"estimator": name, **row} for name, row in rows.items()]).set_index("estimator")
+
+
+def markdown_table(rows: dict[str, dict[str, float]], decimals: int = 4) -> str:
+    """``rows`` (name -> columns, every row the same columns) as a GitHub markdown table, exactly as
+    pandas' ``to_markdown(floatfmt=".4f")`` (tabulate's "pipe" format) prints the same table, without
+    loading either: the names left-aligned under ``estimator``, the numbers with ``decimals`` digits
+    aligned on their decimal point (NaN and infinities, which have none, end where the digits would
+    start), each column at least its header plus two wide."""
+    names = list(rows)
+    headers = list(rows[names[0]]) if names else []
+    name_width = max([len("estimator") + 2, *(len(name) for name in names)])
+    columns = [
+        _aligned_numbers([rows[name][header] for name in names], len(header) + 2, decimals) for header in headers
+    ]
+    widths = [name_width] + [len(column[0]) if column else len(header) + 2 for column, header in zip(columns, headers)]
+    lines = [
+        "| " + " | ".join(["estimator".ljust(name_width)] + [h.rjust(w) for h, w in zip(headers, widths[1:])]) + " |",
+        "|" + "|".join([":" + "-" * (name_width + 1)] + ["-" * (w + 1) + ":" for w in widths[1:]]) + "|",
+    ]
+    for row, name in enumerate(names):
+        lines.append("| " + " | ".join([name.ljust(name_width)] + [column[row] for column in columns]) + " |")
+    return "\n".join(lines)
+
+
+def _aligned_numbers(values: list[float], min_width: int, decimals: int) -> list[str]:
+    """``values`` formatted to ``decimals`` places, padded on the right to line up their decimal
+    points (a value without one, NaN or inf, as if its point followed it), then right-aligned to a
+    common width of at least ``min_width``."""
+    texts = [format(float(value), f".{decimals}f") for value in values]
+    after = [len(text) - text.index(".") - 1 if "." in text else -1 for text in texts]
+    texts = [text + " " * (max(after) - places) for text, places in zip(texts, after)]
+    width = max([min_width, *(len(text) for text in texts)])
+    return [text.rjust(width) for text in texts]
 
 
 def score_run(run: LoadedRun, result: SlamResult, match_radius: float = 0.05) -> RunScore | None:
@@ -107,17 +169,21 @@ def score_run(run: LoadedRun, result: SlamResult, match_radius: float = 0.05) ->
         estimates["laser odometry"] = laser.poses(run.start_pose)
     mean = result.mean_poses[records]
     estimates.update({FILTER_MEAN: mean, "FastSLAM (best particle)": result.best_poses[records]})
-    table = error_table(estimates, truth)
+    rows = error_rows(estimates, truth)
     nees = normalized_estimation_error(mean, result.pose_covariances[records], truth)
-    table["mean_nees"] = table["median_nees"] = np.nan
     summary = nees_summary(nees)
-    table.loc[FILTER_MEAN, ["mean_nees", "median_nees"]] = [
-        np.nan if summary[key] is None else summary[key] for key in ("mean", "median")
-    ]
+    for row in rows.values():
+        row.update(dict.fromkeys(NEES_COLUMNS, math.nan))
+    rows[FILTER_MEAN].update(
+        {
+            column: math.nan if summary[key] is None else float(summary[key])
+            for column, key in zip(NEES_COLUMNS, ("mean", "median"))
+        }
+    )
     alignment = align_se2(mean, truth)
     aligned = apply_se2(alignment, result.landmarks) if len(result.landmarks) else result.landmarks
     map_errors = {
         "as estimated": map_error(result.landmarks, run.true_corners, match_radius),
         "aligned": map_error(aligned, run.true_corners, match_radius),
     }
-    return RunScore(records, table, nees, summary, alignment, map_errors)
+    return RunScore(records, rows, nees, summary, alignment, map_errors)
