@@ -69,7 +69,8 @@ def test_a_module_that_does_not_import_is_the_error_of_the_call_that_needs_it():
 
 def test_the_slam_command_leaves_matplotlib_to_its_side_process(tmp_path):
     """The figure and the map export are drawn in the side process: the command's own process never
-    loads matplotlib, and the outputs are all there."""
+    loads matplotlib, nor pandas, tabulate (the error table is formatted without them) or tqdm (no
+    progress bar), and the outputs are all there."""
     from mazeslam import simulate
 
     log = simulate(tmp_path / "run.log", seed=1, duration=6.0, progress=False).log_path
@@ -78,11 +79,11 @@ def test_the_slam_command_leaves_matplotlib_to_its_side_process(tmp_path):
         "import sys\n"
         "from mazeslam.cli import main\n"
         f"main(['slam', {str(log)!r}, '--particles', '20', '--out', {str(out)!r}, '--quiet'], standalone_mode=False)\n"
-        "print('matplotlib' in sys.modules)\n"
+        "print(*(name in sys.modules for name in ('matplotlib', 'pandas', 'tabulate', 'tqdm')))\n"
     )
     printed = subprocess.run(
         [sys.executable, "-c", code], capture_output=True, text=True, check=True, cwd=PROJECT_ROOT
     ).stdout
-    assert printed.split()[-1] == "False"
+    assert printed.split()[-4:] == ["False"] * 4
     for name in ("slam.png", "occupancy.pgm", "occupancy.yaml", "occupancy.png", "landmarks.csv", "map.json"):
         assert (out / name).stat().st_size > 0, name
