@@ -34,15 +34,25 @@ def range_bearing(poses: np.ndarray, landmarks: np.ndarray) -> tuple[np.ndarray,
         h_landmark (n, 2, 2): d z_hat / d landmark;
         h_pose (n, 2, 3): d z_hat / d pose.
     """
+    z_hat, h_landmark = range_bearing_landmark(poses, landmarks)
+    h_pose = np.empty((len(poses), 2, 3))
+    h_pose[:, :, :2] = -h_landmark
+    h_pose[:, 0, 2], h_pose[:, 1, 2] = 0.0, -1.0
+    return z_hat, h_landmark, h_pose
+
+
+def range_bearing_landmark(poses: np.ndarray, landmarks: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """``range_bearing``'s z_hat (n, 2) and h_landmark (n, 2, 2) only (a landmark's own update)."""
     delta = landmarks - poses[:, :2]
     dx, dy = delta[:, 0], delta[:, 1]
     q = np.maximum(dx * dx + dy * dy, 1e-12)
     rho = np.sqrt(q)
-    z_hat = np.column_stack([rho, wrap(np.arctan2(dy, dx) - poses[:, 2])])
-    h_landmark = np.stack([np.stack([dx / rho, dy / rho], -1), np.stack([-dy / q, dx / q], -1)], -2)
-    minus_one = np.stack([np.zeros(len(poses)), -np.ones(len(poses))], -1)[..., None]
-    h_pose = np.concatenate([-h_landmark, minus_one], -1)
-    return z_hat, h_landmark, h_pose
+    z_hat = np.empty((len(poses), 2))
+    z_hat[:, 0], z_hat[:, 1] = rho, wrap(np.arctan2(dy, dx) - poses[:, 2])
+    h_landmark = np.empty((len(poses), 2, 2))
+    h_landmark[:, 0, 0], h_landmark[:, 0, 1] = dx / rho, dy / rho
+    h_landmark[:, 1, 0], h_landmark[:, 1, 1] = -dy / q, dx / q
+    return z_hat, h_landmark
 
 
 def innovation(observed: np.ndarray, predicted: np.ndarray) -> np.ndarray:

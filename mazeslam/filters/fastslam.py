@@ -389,12 +389,13 @@ class FastSLAM:
         self._boxes[slots, 3] = np.where(exists, y, -np.inf).max(axis=0)
         self._spreads[slots] = np.where(exists, covariances[..., 0, 0] + covariances[..., 1, 1], 0.0).max(axis=0)
 
-    def _widen_index(self, rows: np.ndarray, slots: np.ndarray) -> None:
+    def _widen_index(self, rows: np.ndarray, slots: np.ndarray, means=None, covariances=None) -> None:
         """Widen the index (``reindex``) to the landmarks ``rows``, ``slots`` (n,) just written
         (only those outside their slot's box or above its spread: a landmark update shrinks the
-        covariance and moves the mean a little)."""
-        means = self.means[rows, slots]
-        covariances = self.covariances[rows, slots]
+        covariance and moves the mean a little); ``means`` (n, 2) and ``covariances`` (n, 2, 2):
+        what was written there, when at hand."""
+        means = self.means[rows, slots] if means is None else means
+        covariances = self.covariances[rows, slots] if covariances is None else covariances
         spread = covariances[:, 0, 0] + covariances[:, 1, 1]
         box = self._boxes[slots]
         out = (
@@ -559,15 +560,14 @@ class FastSLAM:
         first = self._first_updates(rows, slots)
         while len(rows):
             r, k, j = rows[first], ks[first], slots[first]
-            predicted, jacobian, _ = ekf.range_bearing(self.poses[r], self.means[r, j])
+            predicted, jacobian = ekf.range_bearing_landmark(self.poses[r], self.means[r, j])
             residual = ekf.innovation(observations[k], predicted)
-            self.means[r, j], self.covariances[r, j], _ = ekf.update(
-                self.means[r, j], self.covariances[r, j], residual, jacobian, noise[k]
-            )
+            means, covariances, _ = ekf.update(self.means[r, j], self.covariances[r, j], residual, jacobian, noise[k])
+            self.means[r, j], self.covariances[r, j] = means, covariances
             self.seen[r, j] += 1
             self.missed[r, j] = 0
             matched_now[r, j] = True
-            self._widen_index(r, j)
+            self._widen_index(r, j, means, covariances)
             rows, ks, slots = rows[~first], ks[~first], slots[~first]
             first = self._first_updates(rows, slots)
 
@@ -677,9 +677,10 @@ class FastSLAM:
         self.reindex(np.flatnonzero(widths > REINDEX_WIDTH))  # slots that held far-apart landmarks
 
     # -- estimates ----------------------------------------------------------------------------
-    def mean_pose(self) -> np.ndarray:
-        """Weighted mean pose (3,); the heading is the circular mean."""
-        w = self.weights()
+    def mean_pose(self, weights: np.ndarray | None = None) -> np.ndarray:
+        """Weighted mean pose (3,); the heading is the circular mean. ``weights``: ``weights()``
+        when at hand."""
+        w = self.weights() if weights is None else weights
         x, y = w @ self.poses[:, 0], w @ self.poses[:, 1]
         theta = math.atan2(w @ np.sin(self.poses[:, 2]), w @ np.cos(self.poses[:, 2]))
         return np.array([x, y, theta])
@@ -688,7 +689,7 @@ class FastSLAM:
         """Covariance (3, 3) of the weighted particle cloud around ``mean_pose`` (heading
         differences wrapped); FastSLAM 2.0 adds the motion uncertainty not yet drawn."""
         w = self.weights()
-        deviation = self.poses - self.mean_pose()
+        deviation = self.poses - self.mean_pose(w)
         deviation[:, 2] = wrap_angle(deviation[:, 2])
         covariance = np.einsum("p,pi,pj->ij", w, deviation, deviation)
         return covariance + np.einsum("p,pij->ij", w, self.pose_covariances)

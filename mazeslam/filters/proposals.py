@@ -146,10 +146,11 @@ class ObservationProposal:
             if not len(rows):
                 continue
             slots = assigned[rows, k]
-            z_hat, h_landmark, h_pose = ekf.range_bearing(mean[rows], means[rows, slots])
+            at = slice(None) if len(rows) == len(assigned) else rows  # every particle: no copies in and out
+            z_hat, h_landmark, h_pose = ekf.range_bearing(mean[at], means[rows, slots])
             landmark_noise = ekf.congruence(covariances[rows, slots], h_landmark) + noise[k]
             residual = ekf.innovation(observation, z_hat)
-            mean[rows], covariance[rows], s = ekf.update(mean[rows], covariance[rows], residual, h_pose, landmark_noise)
+            mean[at], covariance[at], s = ekf.update(mean[at], covariance[at], residual, h_pose, landmark_noise)
             s00, s01, s11 = s[:, 0, 0], s[:, 0, 1], s[:, 1, 1]
             determinant[rows, k] = s00 * s11 - s01 * s01
             nu0, nu1 = residual[:, 0], residual[:, 1]
