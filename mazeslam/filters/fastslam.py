@@ -244,15 +244,26 @@ class MeasurementModel:
 
     Attributes:
         candidates: the landmark slots modelled, C of them.
-        det, distance2: determinant and squared Mahalanobis distance of the innovation under
-            S = H Sigma H^T + R (+ Gx Sigma_x Gx^T with the pose's uncertainty), each (P, K, C);
-            computed for the pairs ``candidates.near`` only: elsewhere distance2 is inf (as for
-            slots the particle does not hold) and det NaN.
+        distance2: (P, K, C) squared Mahalanobis distance of the innovation under
+            S = H Sigma H^T + R (+ Gx Sigma_x Gx^T with the pose's uncertainty), computed for the
+            pairs ``candidates.near`` only: elsewhere inf (as for slots the particle does not hold).
+        pairs: the observations and candidate columns (Q,) of those pairs, in ``near``'s order.
+        pair_det: (P, Q) the determinant of S of each pair (``det`` spreads it over (P, K, C)).
     """
 
     candidates: Candidates
-    det: np.ndarray
     distance2: np.ndarray
+    pairs: tuple[np.ndarray, np.ndarray]
+    pair_det: np.ndarray
+
+    @property
+    def det(self) -> np.ndarray:
+        """(P, K, C) the determinant of S, NaN outside the pairs (made when asked for: only FastSLAM
+        1.0's weights use it)."""
+        det = np.full(self.distance2.shape, np.nan)
+        ks, columns = self.pairs
+        det[:, ks, columns] = self.pair_det
+        return det
 
 
 class FastSLAM:
@@ -423,6 +434,8 @@ class FastSLAM:
         Written entry by entry over (P, K, C) arrays: the 2x2 matrices never become arrays of
         their own."""
         slots = candidates.slots
+        if len(slots) and slots[-1] - slots[0] + 1 == len(slots):  # a run of slots: read in place, not copied
+            slots = slice(slots[0], slots[-1] + 1)
         delta = self.means[:, slots] - self.poses[:, None, :2]  # (P, C, 2)
         dx, dy = delta[..., 0], delta[..., 1]
         q = np.maximum(dx * dx + dy * dy, 1e-12)
@@ -449,11 +462,9 @@ class FastSLAM:
         nu0 = observations[ks, 0] - rho[:, columns]
         nu1 = ekf.wrap(observations[ks, 1] - angle[:, columns])
         pair_distance2 = (t11 * nu0 * nu0 - 2 * t01 * nu0 * nu1 + t00 * nu1 * nu1) / pair_det
-        shape = (len(self.poses), len(observations), len(slots))
-        distance2, det = np.full(shape, np.inf), np.full(shape, np.nan)
+        distance2 = np.full((len(self.poses), len(observations), len(candidates.slots)), np.inf)
         distance2[:, ks, columns] = np.where(candidates.valid[:, columns], pair_distance2, np.inf)
-        det[:, ks, columns] = pair_det
-        return MeasurementModel(candidates, det, distance2)
+        return MeasurementModel(candidates, distance2, (ks, columns), pair_det)
 
     # -- update -------------------------------------------------------------------------------
     def update(
