@@ -15,6 +15,9 @@
    skipped, saying so, when the file is absent), per wall-clock second or, with ``--cpu-time``, per
    second of this process's CPU time. Target: at least 1000x.
 3. The command on log1 too (no target: 198 records, more scans than the simulated log).
+Each row also gives ``octave_x``: the exercise's own code in Octave (about 90 s at 1000 particles
+on a 133-record course log, issue 18's figure: quoted, not timed here), scaled to the log's records,
+over the command's best wall clock or the filter's time.
 Run: ``python benchmarks/bench_command.py``.
 """
 
@@ -45,6 +48,9 @@ DURATION = 18.0
 REPEATS = 3
 TARGET_COMMAND_SECONDS = 1.0
 TARGET_REAL_TIME = 1000.0
+#: The exercise's own MATLAB code in Octave at 1000 particles: about 90 s on a 133-record course log
+#: (issue 18's measurement; quoted: Octave is not part of this benchmark).
+OCTAVE_SECONDS, OCTAVE_RECORDS = 90.0, 133
 #: The exercise's own course log (shared/data beside the project).
 COURSE_LOG = Path(__file__).resolve().parents[2] / "shared" / "data" / "course" / "log1.txt"
 
@@ -82,7 +88,12 @@ def time_filter(run: LoadedRun, repeats: int = REPEATS) -> float:
     return min(seconds)
 
 
-def _command_row(name: str, timings: dict, filter_seconds: float, target: float | None) -> dict:
+def _octave_seconds(run: LoadedRun) -> float:
+    """The exercise's Octave code's quoted time, scaled to ``run``'s records."""
+    return OCTAVE_SECONDS * len(run.log) / OCTAVE_RECORDS
+
+
+def _command_row(name: str, run: LoadedRun, timings: dict, filter_seconds: float, target: float | None) -> dict:
     best, cpu = min(timings["wall"]), min(timings["cpu"])
     row = {
         "benchmark": f"mazeslam slam, {name}, {PARTICLES} particles: command (best of {REPEATS}) over its filter",
@@ -91,6 +102,7 @@ def _command_row(name: str, timings: dict, filter_seconds: float, target: float 
         "cpu_s": cpu,
         "baseline_s": filter_seconds,
         "ratio": (cpu if uses_cpu_time() else best) / filter_seconds,
+        "octave_x": _octave_seconds(run) / best,
     }
     if target is not None:
         row.update(target=f"command <= {target} s", met=best <= target)
@@ -104,6 +116,7 @@ def _real_time_row(name: str, run: LoadedRun, filter_seconds: float) -> dict:
         "seconds": filter_seconds,
         "baseline_s": run.log.duration,
         "ratio": factor,
+        "octave_x": _octave_seconds(run) / filter_seconds,
         "target": TARGET_REAL_TIME,
         "met": factor >= TARGET_REAL_TIME,
     }
@@ -116,7 +129,8 @@ def run() -> Iterator[dict]:
         simulated = load_run(path)
         name = f"simulated {DURATION:.0f} s log ({len(simulated.log)} records)"
         filter_seconds = time_filter(simulated)
-        yield _command_row(name, time_command(path, Path(folder) / "out"), filter_seconds, TARGET_COMMAND_SECONDS)
+        timings = time_command(path, Path(folder) / "out")
+        yield _command_row(name, simulated, timings, filter_seconds, TARGET_COMMAND_SECONDS)
         yield _real_time_row(name, simulated, filter_seconds)
         if not COURSE_LOG.exists():
             print(f"skipped: the exercise's course log {COURSE_LOG} is absent (shared/data not beside the project)")
@@ -125,7 +139,7 @@ def run() -> Iterator[dict]:
         name = f"the exercise's log1 ({len(course.log)} records)"
         filter_seconds = time_filter(course)
         yield _real_time_row(name, course, filter_seconds)
-        yield _command_row(name, time_command(COURSE_LOG, Path(folder) / "log1"), filter_seconds, None)
+        yield _command_row(name, course, time_command(COURSE_LOG, Path(folder) / "log1"), filter_seconds, None)
 
 
 if __name__ == "__main__":
