@@ -431,40 +431,38 @@ class FastSLAM:
     ) -> MeasurementModel:
         """The measurement model of the ``candidates`` at the current poses (see
         ``MeasurementModel``); ``with_pose_uncertainty`` adds the motion covariance not yet drawn.
-        Written entry by entry over (P, K, C) arrays: the 2x2 matrices never become arrays of
-        their own."""
+        Written entry by entry, slot-major: (C, P) arrays, each slot's row of particles contiguous, so
+        that a pair's row is one copied row (the 2x2 matrices never become arrays of their own)."""
         slots = candidates.slots
-        if len(slots) and slots[-1] - slots[0] + 1 == len(slots):  # a run of slots: read in place, not copied
-            slots = slice(slots[0], slots[-1] + 1)
-        delta = self.means[:, slots] - self.poses[:, None, :2]  # (P, C, 2)
-        dx, dy = delta[..., 0], delta[..., 1]
+        means = self.means.transpose(1, 0, 2)[slots]  # (C, P, 2)
+        dx, dy = means[..., 0] - self.poses[:, 0], means[..., 1] - self.poses[:, 1]
         q = np.maximum(dx * dx + dy * dy, 1e-12)
         rho = np.sqrt(q)
         a, b, c, d = dx / rho, dy / rho, -dy / q, dx / q  # H = d(range, bearing)/d(landmark)
-        sigma = self.covariances[:, slots]
+        sigma = self.covariances.transpose(1, 0, 2, 3)[slots]  # (C, P, 2, 2)
         s00, s01, s11 = sigma[..., 0, 0], sigma[..., 0, 1], sigma[..., 1, 1]
         if with_pose_uncertainty:  # Gx = -[H | (0, 1)^T]: the pose's position adds to the landmark's covariance
-            pose = self.pose_covariances[:, None]  # (P, 1, 3, 3)
-            s00, s01, s11 = s00 + pose[..., 0, 0], s01 + pose[..., 0, 1], s11 + pose[..., 1, 1]
+            pose = self.pose_covariances  # (P, 3, 3)
+            s00, s01, s11 = s00 + pose[:, 0, 0], s01 + pose[:, 0, 1], s11 + pose[:, 1, 1]
         t00 = a * a * s00 + 2 * a * b * s01 + b * b * s11
         t01 = a * c * s00 + (a * d + b * c) * s01 + b * d * s11
         t11 = c * c * s00 + 2 * c * d * s01 + d * d * s11
         if with_pose_uncertainty:
-            t01 = t01 + a * pose[..., 0, 2] + b * pose[..., 1, 2]
-            t11 = t11 + 2 * (c * pose[..., 0, 2] + d * pose[..., 1, 2]) + pose[..., 2, 2]
-        angle = np.arctan2(dy, dx) - self.poses[:, None, 2]  # predicted bearing, unwrapped
-        # Only the observation-slot pairs near each other, each (P, Q).
+            t01 = t01 + a * pose[:, 0, 2] + b * pose[:, 1, 2]
+            t11 = t11 + 2 * (c * pose[:, 0, 2] + d * pose[:, 1, 2]) + pose[:, 2, 2]
+        angle = np.arctan2(dy, dx) - self.poses[:, 2]  # predicted bearing, unwrapped
+        # Only the observation-slot pairs near each other, each (Q, P).
         ks, columns = np.nonzero(candidates.near)
-        t00 = t00[:, columns] + noise[ks, 0, 0]
-        t01 = t01[:, columns] + noise[ks, 0, 1]
-        t11 = t11[:, columns] + noise[ks, 1, 1]
+        t00 = t00[columns] + noise[ks, 0, 0, None]
+        t01 = t01[columns] + noise[ks, 0, 1, None]
+        t11 = t11[columns] + noise[ks, 1, 1, None]
         pair_det = t00 * t11 - t01 * t01
-        nu0 = observations[ks, 0] - rho[:, columns]
-        nu1 = ekf.wrap(observations[ks, 1] - angle[:, columns])
+        nu0 = observations[ks, 0, None] - rho[columns]
+        nu1 = ekf.wrap(observations[ks, 1, None] - angle[columns])
         pair_distance2 = (t11 * nu0 * nu0 - 2 * t01 * nu0 * nu1 + t00 * nu1 * nu1) / pair_det
-        distance2 = np.full((len(self.poses), len(observations), len(candidates.slots)), np.inf)
-        distance2[:, ks, columns] = np.where(candidates.valid[:, columns], pair_distance2, np.inf)
-        return MeasurementModel(candidates, distance2, (ks, columns), pair_det)
+        distance2 = np.full((len(self.poses), len(observations), len(slots)), np.inf)
+        distance2[:, ks, columns] = np.where(candidates.valid[:, columns], pair_distance2.T, np.inf)
+        return MeasurementModel(candidates, distance2, (ks, columns), pair_det.T)
 
     # -- update -------------------------------------------------------------------------------
     def update(
