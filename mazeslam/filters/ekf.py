@@ -129,12 +129,10 @@ def _batch_first(matrix: np.ndarray) -> np.ndarray:
 
 
 def _product(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """Matrix products (r, c, n) of batches a (r, m, n) and b (m, c, n), each entry summed over m in
-    order (the rounding of a plain loop over the entries)."""
-    total = a[:, 0, None] * b[None, 0]
-    for j in range(1, a.shape[1]):
-        total = total + a[:, j, None] * b[None, j]
-    return total
+    """Matrix products (r, c, n) of batches a (r, m, n) and b (m, c, n) (either n may be 1): one
+    ``einsum``, each entry summed over m in order (the rounding of a plain loop over the entries;
+    about twice as fast as a broadcast product per term)."""
+    return np.einsum("im...,mj...->ij...", a, b)
 
 
 def _transpose(a: np.ndarray) -> np.ndarray:
