@@ -570,7 +570,7 @@ def sweep(sweep_file, out_dir, workers, scheduler, quiet):
 
 
 @main.command()
-@click.argument("log_file", type=click.Path(exists=True, dir_okay=False, path_type=Path))
+@click.argument("log_files", nargs=-1, required=True, type=click.Path(exists=True, dir_okay=False, path_type=Path))
 @click.option(
     "--config",
     "config_path",
@@ -585,11 +585,13 @@ def sweep(sweep_file, out_dir, workers, scheduler, quiet):
 )
 @beam_geometry_options
 @click.option("--quiet", is_flag=True, help="No progress bar.")
-def calibrate(log_file, config_path, write_path, first_beam_angle, beam_direction, mount_x, quiet):
+def calibrate(log_files, config_path, write_path, first_beam_angle, beam_direction, mount_x, quiet):
     """Measure a log's noise (laser range, odometry, corner observations) as filter settings:
-    against the truth beside it when there is one, else against the filter's own path and map."""
+    against the truth beside it when there is one, else against the filter's own path and map.
+    Several logs (one robot's, one dataset's) give one setting for them all, every noise fitted
+    over all of them together."""
     from mazeslam.beam_detection import with_detected_convention
-    from mazeslam.evaluation.calibration import calibrate as measure
+    from mazeslam.evaluation.calibration import calibrate_logs
     from mazeslam.loaded_run import load_run
     from mazeslam.slam import load_slam_config
 
@@ -599,11 +601,11 @@ def calibrate(log_file, config_path, write_path, first_beam_angle, beam_directio
     config = dataclasses.replace(
         config, sensor=_geometry_overrides(first_beam_angle, beam_direction, mount_x).over(config.sensor)
     )
-    run = with_detected_convention(load_run(log_file, config.sensor), config)
+    runs = [with_detected_convention(load_run(log_file, config.sensor), config) for log_file in log_files]
     try:
-        lines = measure(run, config, progress=not quiet).settings()
+        lines = calibrate_logs(runs, config, progress=not quiet).settings()
     except ValueError as error:
-        raise click.ClickException(f"{log_file}: {error}") from error
+        raise click.ClickException(f"{', '.join(map(str, log_files))}: {error}") from error
     text = "\n".join(lines) + "\n"
     click.echo(text, nl=False)
     if write_path:

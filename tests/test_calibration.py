@@ -58,3 +58,44 @@ def test_the_calibrate_command_prints_settings_that_load(default_run, tmp_path):
     assert "against truth" in result.output
     config = load_slam_config(written)  # the printed settings are a valid config
     assert config.corners.covariance_scale["wall_end"] > config.corners.covariance_scale["corner"]
+
+
+def test_the_range_noise_of_several_logs_pools_their_lines_by_degrees_of_freedom():
+    """Hand-computed: 100 points on 10 lines (80 dof) at 2 mm and 50 on 5 (40 dof) at 5 mm pool to
+    sqrt((80 x 4 + 40 x 25) / 120) mm."""
+    import math
+
+    from mazeslam.evaluation.calibration import RangeNoise, pooled_range_noise
+
+    pooled = pooled_range_noise([RangeNoise(0.002, 100, 10), RangeNoise(0.005, 50, 5)])
+    assert pooled.std == pytest.approx(math.sqrt((80 * 0.002**2 + 40 * 0.005**2) / 120))
+    assert (pooled.points, pooled.lines) == (150, 15)
+
+
+def test_a_log_calibrated_twice_over_gives_its_own_settings_on_twice_the_data(default_run):
+    """Pooling is a round trip: the same log given twice fits the same noise from twice the
+    stretches and observations, and its repeat correlations do not pair one copy with the other."""
+    from mazeslam.evaluation.calibration import calibrate, calibrate_logs
+    from mazeslam.slam import SlamConfig
+
+    run = load_run(default_run.log_path)
+    alone, twice = calibrate(run, SlamConfig()), calibrate_logs([run, run], SlamConfig())
+    assert twice.source.startswith("2 logs")
+    assert twice.motion.stretches == 2 * alone.motion.stretches
+    assert twice.observations.observations == 2 * alone.observations.observations
+    assert twice.motion.noise.sigmaX == pytest.approx(alone.motion.noise.sigmaX)
+    assert twice.range_noise.std == pytest.approx(alone.range_noise.std)
+    for kind in alone.observations.kind_scales:
+        assert twice.observations.widths[kind] == pytest.approx(alone.observations.widths[kind])
+        assert twice.observations.correlations[kind] == pytest.approx(alone.observations.correlations[kind])
+
+
+def test_the_calibrate_command_takes_several_logs_of_one_family(default_run):
+    from click.testing import CliRunner
+
+    from mazeslam.cli import main
+
+    log = str(default_run.log_path)
+    result = CliRunner().invoke(main, ["calibrate", log, log, "--quiet"])
+    assert result.exit_code == 0, result.output
+    assert f"measured by mazeslam calibrate on 2 logs ({log}, {log}) against truth" in result.output

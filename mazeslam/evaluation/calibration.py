@@ -25,13 +25,14 @@ from __future__ import annotations
 
 import dataclasses
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
 from scipy.optimize import nnls
 
 from mazeslam import log
-from mazeslam.evaluation.odometry_noise import MeasuredOdometryNoise, measure_motion_noise
+from mazeslam.evaluation.odometry_noise import MeasuredOdometryNoise, fit_noise, motion_stretch_errors
 from mazeslam.filters import ekf
 from mazeslam.filters.corners import CornerExtractor
 from mazeslam.filters.scan_matching import laser_odometry
@@ -81,6 +82,14 @@ def laser_range_noise(scans: np.ndarray, extractor: CornerExtractor) -> RangeNoi
     return RangeNoise(math.sqrt(squared / dof), points, lines)
 
 
+def pooled_range_noise(measured: Sequence[RangeNoise]) -> RangeNoise:
+    """One range noise from several logs' (``laser_range_noise``): the variance pooled over all
+    their lines, each line weighing by its degrees of freedom (points - 2)."""
+    dof = [noise.points - 2 * noise.lines for noise in measured]
+    variance = sum(noise.std**2 * n for noise, n in zip(measured, dof)) / sum(dof)
+    return RangeNoise(math.sqrt(variance), sum(n.points for n in measured), sum(n.lines for n in measured))
+
+
 @dataclass(frozen=True)
 class ObservationNoise:
     """The noise of observations, in the filter's terms: a corner observation's covariance is
@@ -121,6 +130,27 @@ class Residuals:
     kinds: np.ndarray
     landmarks: np.ndarray
     updates: np.ndarray
+
+
+def pooled_residuals(parts: Sequence[Residuals]) -> Residuals:
+    """Several logs' residuals as one: landmarks and updates numbered apart per log, so that no
+    landmark of one log is taken for another's and no update follows one of another log."""
+    landmark_offset, update_offset, shifted = 0, 0, []
+    for part in parts:
+        shifted.append(
+            Residuals(
+                part.errors,
+                part.covariances,
+                part.kinds,
+                part.landmarks + landmark_offset,
+                part.updates + update_offset,
+            )
+        )
+        landmark_offset += int(part.landmarks.max(initial=-1)) + 1
+        update_offset += int(part.updates.max(initial=-1)) + 2
+    return Residuals(
+        *(np.concatenate([getattr(p, field.name) for p in shifted]) for field in dataclasses.fields(Residuals))
+    )
 
 
 def observations_by_record(run: LoadedRun, extractor: CornerExtractor | None):
@@ -222,10 +252,10 @@ def _repeat_correlation(residuals: Residuals, kind: str) -> float:
 
 @dataclass(frozen=True)
 class Calibration:
-    """What ``calibrate`` measured on one log.
+    """What ``calibrate`` (or ``calibrate_logs``) measured on one log (or several).
 
     Attributes:
-        source: the log; reference: what the residuals were taken against ("truth" or "the
+        source: the log (or the logs); reference: what the residuals were taken against ("truth" or "the
             filter's path and map").
         range_noise: the laser's (None for a log without scans).
         motion: the odometry's (or laser odometry's) noise; motion_source names which, against what.
@@ -284,10 +314,20 @@ class Calibration:
         return lines
 
 
-def calibrate(run: LoadedRun, config, progress: bool = False) -> Calibration:
-    """Measure ``run``'s noises (see the module docstring) under the slam ``config``
-    (``SlamConfig``: its corner settings, scan matching and, without truth, the filter that
-    provides the reference path and map)."""
+@dataclass(frozen=True)
+class _LogMeasurements:
+    """What one log gives ``calibrate_logs`` before the fits: what it was measured against, the
+    laser's range noise (None without scans), the motion's stretch errors (K, 4)
+    (``motion_stretch_errors``) and what moved the filter, the observations' residuals."""
+
+    reference: str
+    range_noise: RangeNoise | None
+    stretches: np.ndarray
+    motion_source: str
+    residuals: Residuals
+
+
+def _measure_log(run: LoadedRun, config, progress: bool) -> _LogMeasurements:
     raw = dataclasses.replace(config.corners, covariance_scale={})  # measure the fits' own covariance
     extractor = CornerExtractor(run.geometry, run.log.width, raw) if run.log.n_beams else None
     range_noise = laser_range_noise(run.log.values[run.log.is_scan], extractor) if extractor is not None else None
@@ -297,7 +337,7 @@ def calibrate(run: LoadedRun, config, progress: bool = False) -> Calibration:
     else:
         result = slam_on_run(run, config, progress, laser=laser)
         reference, poses, landmarks = "the filter's path and map", result.mean_poses, result.landmarks
-    motion = measure_motion_noise(
+    stretches = motion_stretch_errors(
         run.log_without_glitches(config.odometry.jump_tolerance), run.truth if run.truth is not None else poses, laser
     )
     motion_source = (
@@ -305,9 +345,31 @@ def calibrate(run: LoadedRun, config, progress: bool = False) -> Calibration:
         f"{'truth' if run.truth is not None else reference}"
     )
     residuals = observation_residuals(run, extractor, poses, landmarks, config.evaluation.match_radius)
+    return _LogMeasurements(reference, range_noise, stretches, motion_source, residuals)
+
+
+def calibrate(run: LoadedRun, config, progress: bool = False) -> Calibration:
+    """Measure ``run``'s noises (see the module docstring) under the slam ``config``
+    (``SlamConfig``: its corner settings, scan matching and, without truth, the filter that
+    provides the reference path and map)."""
+    return calibrate_logs([run], config, progress)
+
+
+def calibrate_logs(runs: Sequence[LoadedRun], config, progress: bool = False) -> Calibration:
+    """One setting for a family of logs (one robot's or one dataset's): each log measured as
+    ``calibrate`` does, and every fit made once over all their stretches, residuals and walls
+    together, so that a log with more driving or more observations weighs more."""
+    if not runs:
+        raise ValueError("no log to calibrate")
+    measured = [_measure_log(run, config, progress) for run in runs]
+    source = str(runs[0].path) if len(runs) == 1 else f"{len(runs)} logs ({', '.join(str(r.path) for r in runs)})"
+    reference = "; ".join(sorted({m.reference for m in measured}))
+    motion_source = "; ".join(sorted({m.motion_source for m in measured}))
+    ranges = [m.range_noise for m in measured if m.range_noise is not None]
+    range_noise = pooled_range_noise(ranges) if ranges else None
+    motion = fit_noise(np.concatenate([m.stretches for m in measured]))
+    residuals = pooled_residuals([m.residuals for m in measured])
     try:
-        return Calibration(
-            str(run.path), reference, range_noise, motion, motion_source, fit_observation_noise(residuals)
-        )
+        return Calibration(source, reference, range_noise, motion, motion_source, fit_observation_noise(residuals))
     except ValueError as problem:
-        return Calibration(str(run.path), reference, range_noise, motion, motion_source, None, str(problem))
+        return Calibration(source, reference, range_noise, motion, motion_source, None, str(problem))

@@ -118,14 +118,22 @@ def measure_odometry_noise(course_log: CourseLog, truth: np.ndarray) -> Measured
     return fit_noise(stretch_errors(course_log, truth))
 
 
+def motion_stretch_errors(
+    course_log: CourseLog, reference: np.ndarray, laser: LaserOdometry | None = None
+) -> np.ndarray:
+    """(K, 4) ``[D, T, e_along, e_theta]`` of whatever moves the filter, against ``reference``
+    poses (R, 3) at every record (the truth, or a filter's path): the laser odometry's stretches
+    (scan to scan) when given, else the odometry's (observation to observation)."""
+    if laser is not None:
+        return laser_stretch_errors(laser, np.asarray(reference)[laser.scan_records])
+    return stretch_errors(course_log, reference)
+
+
 def measure_motion_noise(
     course_log: CourseLog, reference: np.ndarray, laser: LaserOdometry | None = None
 ) -> MeasuredOdometryNoise:
-    """The noise of whatever moves the filter, against ``reference`` poses (R, 3) at every record
-    (the truth, or a filter's path): the laser odometry's when given, else the odometry's."""
-    if laser is not None:
-        return fit_noise(laser_stretch_errors(laser, np.asarray(reference)[laser.scan_records]))
-    return measure_odometry_noise(course_log, reference)
+    """The noise of whatever moves the filter (``motion_stretch_errors``), fitted."""
+    return fit_noise(motion_stretch_errors(course_log, reference, laser))
 
 
 def fit_noise(errors: np.ndarray) -> MeasuredOdometryNoise:
