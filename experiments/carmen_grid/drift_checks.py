@@ -1,0 +1,129 @@
+"""Where the grid filter's remaining error on the CARMEN logs comes from: a uniform scale, or a bend?
+(docs/grid.md, "Known limits": edmonton's slow drift.)
+
+Per (log, seed) of ``results/table.csv``, from the trajectory run.py wrote (``results/<log>_seed<k>/
+trajectory.csv``, best particle at every record), at the scans against the reference poses:
+the aligned ATE after the best rigid motion (as the table) and after the best similarity (rigid
+motion and scale, Umeyama 1991), and that scale (reference over estimate); the 95th percentile of
+the heading error after the rigid alignment. A filter whose path is
+right but uniformly too long or too short (a laser odometry or a range scale off by a fraction)
+loses most of its error under the similarity; a bend does not.
+
+Per log, the laser odometry (configs/carmen.toml's ``[scan_matching]``) against the reference:
+its path length over the reference's, and the median over the accepted intervals longer than
+0.2 m of its error along the reference's motion per metre (positive: longer).
+
+Run: ``python experiments/carmen_grid/drift_checks.py`` after run.py (a few CPU minutes: the
+laser odometry of every log); writes ``results/drift_checks.md``.
+"""
+
+from __future__ import annotations
+
+import tempfile
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from mazeslam.evaluation.metrics import align_se2, apply_se2
+from mazeslam.filters.scan_matching import laser_odometry
+from mazeslam.geometry import relative, wrap_angle
+from mazeslam.imports.carmen import import_carmen
+from mazeslam.loaded_run import LoadedRun, load_run
+from mazeslam.slam import load_slam_config
+
+HERE = Path(__file__).resolve().parent
+CARMEN = HERE.parents[2] / "shared" / "data" / "carmen"
+RESULTS = HERE / "results"
+CONFIG = HERE.parents[1] / "configs" / "carmen.toml"
+
+
+def similarity_fit(estimate: np.ndarray, reference: np.ndarray) -> tuple[float, float, float]:
+    """RMSE (m) of positions ``estimate`` (S, 2) against ``reference`` (S, 2) after the best rigid
+    motion and after the best similarity, and the similarity's scale (Umeyama 1991)."""
+    centred_e, centred_r = estimate - estimate.mean(axis=0), reference - reference.mean(axis=0)
+    u, singular, vt = np.linalg.svd(centred_r.T @ centred_e / len(estimate))
+    sign = np.diag([1.0, np.sign(np.linalg.det(u @ vt))])
+    rotation = u @ sign @ vt
+    scale = float(np.trace(np.diag(singular) @ sign) / np.mean(np.sum(centred_e**2, axis=1)))
+
+    def rmse(factor: float) -> float:
+        return float(np.sqrt(np.mean(np.sum((centred_r - factor * centred_e @ rotation.T) ** 2, axis=1))))
+
+    return rmse(1.0), rmse(scale), scale
+
+
+def load(name: str) -> LoadedRun:
+    with tempfile.TemporaryDirectory() as folder:
+        course = Path(folder) / f"{name}.log"
+        import_carmen(CARMEN / f"{name}-corrected.log.gz", course)
+        return load_run(course)
+
+
+def main() -> None:
+    table = pd.read_csv(RESULTS / "table.csv")
+    scan_matching = load_slam_config(CONFIG).scan_matching
+    seeds, logs = [], []
+    for name, rows in table.groupby("log"):
+        run = load(name)
+        records = np.flatnonzero(run.log.is_scan)
+        reference = run.truth[records]
+        for seed in rows["seed"]:
+            path = RESULTS / f"{name}_seed{seed}" / "trajectory.csv"
+            if not path.exists():
+                continue
+            estimate = pd.read_csv(path).iloc[records][["x", "y", "theta"]].to_numpy()
+            rigid, similar, scale = similarity_fit(estimate[:, :2], reference[:, :2])
+            aligned = apply_se2(align_se2(estimate, reference), estimate)
+            heading = np.degrees(np.abs(wrap_angle(aligned[:, 2] - reference[:, 2])))
+            seeds.append(
+                {
+                    "log": name,
+                    "seed": seed,
+                    "rigid ATE [m]": rigid,
+                    "similarity ATE [m]": similar,
+                    "scale": scale,
+                    "heading error p95 [deg]": np.percentile(heading, 95),
+                }
+            )
+        odometry = laser_odometry(run.log, run.geometry, scan_matching)
+        truth_steps = relative(reference[:-1], reference[1:])
+        steps = odometry.increments[1:]
+        truth_length, length = np.hypot(*truth_steps[:, :2].T), np.hypot(*steps[:, :2].T)
+        used = odometry.accepted[1:] & (truth_length > 0.2)
+        along = np.einsum("ij,ij->i", steps[used, :2], truth_steps[used, :2]) / truth_length[used]
+        logs.append(
+            {
+                "log": name,
+                "laser odometry / reference length": length.sum() / truth_length.sum(),
+                "median error along the motion [%]": 100 * np.median(along / truth_length[used] - 1),
+            }
+        )
+    per_seed = pd.DataFrame(seeds)
+    grouped = per_seed.groupby("log")
+    summary = pd.DataFrame(
+        {
+            "rigid ATE worst [m]": grouped["rigid ATE [m]"].max(),
+            "similarity ATE worst [m]": grouped["similarity ATE [m]"].max(),
+            "scale range": grouped["scale"].apply(lambda s: f"{s.min():.4f}-{s.max():.4f}"),
+            "heading error p95, worst [deg]": grouped["heading error p95 [deg]"].max(),
+        }
+    ).join(pd.DataFrame(logs).set_index("log"))
+    text = (
+        "# Scale or bend? (experiments/carmen_grid/drift_checks.py)\n\n"
+        "Grid filter's best path at the scans against the reference poses, worst seed: aligned ATE after the best "
+        "rigid motion and after the best similarity (the scale range over the seeds, reference over estimate), the "
+        "95th percentile of the heading error after the rigid motion; "
+        "the laser odometry's path length over the reference's and its median error along the reference's "
+        "motion per metre over the accepted intervals.\n\n"
+        + summary.to_markdown(floatfmt=".4g")
+        + "\n\nPer seed:\n\n"
+        + per_seed.to_markdown(index=False, floatfmt=".4g")
+        + "\n"
+    )
+    (RESULTS / "drift_checks.md").write_text(text)
+    print(text)
+
+
+if __name__ == "__main__":
+    main()
