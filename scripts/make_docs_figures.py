@@ -44,7 +44,7 @@ FIGURES: list[tuple[str, str, str, float]] = [
     ("corners_csail", "docs/img/corners_csail.png", "mazeslam corners {carmen}/csail-corrected.log.gz --config configs/corners/carmen.toml --scan 254 --plot docs/img/corners_csail.png", 0.2),  # noqa: E501
     ("corners_freiburg079", "docs/img/corners_freiburg079.png", "mazeslam corners {carmen}/freiburg-079-corrected.log.gz --config configs/corners/carmen.toml --scan 2926 --plot docs/img/corners_freiburg079.png", 0.3),  # noqa: E501
     ("fastslam_default_maze", "docs/img/fastslam_default_maze.png experiments/fastslam_default_maze.csv experiments/fastslam_default_maze.md", "python experiments/fastslam_default_maze.py", 2.0),  # noqa: E501
-    ("mrclam", "docs/img/mrclam_robot1_unknown.png experiments/mrclam/results.md", "python experiments/mrclam/run.py", 2.0),  # noqa: E501
+    ("mrclam", "docs/img/mrclam_robot1_unknown.png docs/img/mrclam_robot1_nees.png experiments/mrclam/results.md", "python experiments/mrclam/run.py", 2.0),  # noqa: E501
     ("maze_env", "docs/img/maze_env.png", "python scripts/figures/maze_env.py", 0.3),
     ("vector_env_coverage", "docs/img/vector_env_coverage.png", "python examples/train_vector_explorer.py --figure docs/img/vector_env_coverage.png", 5.0),  # noqa: E501
     ("carmen", "docs/img/carmen/*.png experiments/carmen/results/table.md", "python experiments/carmen/run.py", 15.0),  # noqa: E501

@@ -8,7 +8,7 @@ import pytest
 from conftest import PROJECT_ROOT, SHARED_DATA
 
 from mazeslam import log, sidecars
-from mazeslam.evaluation.metrics import absolute_trajectory_error
+from mazeslam.evaluation.metrics import absolute_trajectory_error, normalized_estimation_error
 from mazeslam.filters.motion import dead_reckoning
 from mazeslam.imports.mrclam import import_mrclam
 from mazeslam.slam import load_slam_config, slam_on_file
@@ -60,7 +60,7 @@ def robot1(tmp_path_factory):
 
 
 @pytest.mark.parametrize("association", ["known", "unknown"])
-def test_fastslam_halves_the_odometry_error_on_real_data(robot1, association):
+def test_fastslam_halves_the_odometry_error_on_real_data_and_its_covariance_covers_it(robot1, association):
     config = load_slam_config(PROJECT_ROOT / "configs" / "mrclam.toml")
     config = dataclasses.replace(config, fastslam=dataclasses.replace(config.fastslam, association=association))
     result = slam_on_file(robot1, config, progress=False)
@@ -71,3 +71,5 @@ def test_fastslam_halves_the_odometry_error_on_real_data(robot1, association):
         slam_error = absolute_trajectory_error(result.mean_poses, truth, align=align)["rmse"]
         odometry_error = absolute_trajectory_error(reckoned, truth, align=align)["rmse"]
         assert slam_error <= 0.5 * odometry_error, (align, slam_error, odometry_error)
+    nees = normalized_estimation_error(result.mean_poses, result.pose_covariances, truth)
+    assert np.nanmedian(nees) < 20  # the bar: overconfident by at most about 2.6 in standard deviation

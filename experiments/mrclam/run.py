@@ -6,9 +6,10 @@ docs/fastslam.md.
 Imports robot 1, runs `mazeslam slam` with unknown and with known association, and writes
 results.md beside this script: ATE RMSE (as estimated and aligned), the map error within 0.5 m,
 pose NEES (median over the records, consistent 3) and NIS (mean, consistent 2), resampled scans;
-and the figure of the unknown-association run, docs/img/mrclam_robot1_unknown.png: the estimate
+and two figures: the unknown-association run, docs/img/mrclam_robot1_unknown.png, the estimate
 drawn after the same rigid alignment the aligned ATE uses (``metrics.align_se2`` of the mean path
-onto the truth), beside the truth and the surveyed landmarks.
+onto the truth), beside the truth and the surveyed landmarks; and docs/img/mrclam_robot1_nees.png,
+the pose NEES of both runs along the log, where the stated uncertainty departs from the error.
 """
 
 from __future__ import annotations
@@ -24,6 +25,7 @@ HERE = Path(__file__).resolve().parent
 ROOT = HERE.parents[1]
 MAZESLAM = [sys.executable, "-m", "mazeslam.cli"]
 FIGURE = ROOT / "docs" / "img" / "mrclam_robot1_unknown.png"
+NEES_FIGURE = ROOT / "docs" / "img" / "mrclam_robot1_nees.png"
 
 
 def plot_aligned(log: Path, out: Path, path: Path, title: str) -> Path:
@@ -80,7 +82,35 @@ def plot_aligned(log: Path, out: Path, path: Path, title: str) -> Path:
     return save_figure(fig, ax, path, title, legend_columns=2)
 
 
-def run(data: Path, figure: Path | None = FIGURE) -> str:
+def plot_nees_over_time(log: Path, outs: dict[str, Path], path: Path) -> Path:
+    """Pose NEES along the log of each ``mazeslam slam`` folder in ``outs`` (association -> folder),
+    from its trajectory.csv covariance columns against the truth, with the 95 % bound."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from mazeslam.evaluation.consistency import POSE_BOUND_95
+    from mazeslam.evaluation.metrics import normalized_estimation_error
+    from mazeslam.evaluation.plots import save_figure
+    from mazeslam.loaded_run import load_run
+    from mazeslam.sidecars import read_trajectory
+
+    run = load_run(log)
+    assert run.truth is not None
+    fig, ax = plt.subplots(figsize=(8, 4))
+    for association, out in outs.items():
+        times, poses, covariances = read_trajectory(out / "trajectory.csv")
+        nees = normalized_estimation_error(poses, covariances, run.truth)
+        ax.semilogy(times - times[0], nees, linewidth=0.6, label=f"FastSLAM, {association} association")
+    ax.axhline(POSE_BOUND_95, color="black", linestyle="--", linewidth=0.8, label="95 % bound (3 dof)")
+    ax.axhline(3.0, color="0.5", linestyle=":", linewidth=0.8, label="consistent mean (3)")
+    ax.set_xlabel("time since the start [s]")
+    ax.set_ylabel("pose NEES (log scale)")
+    return save_figure(fig, ax, path, "MRCLAM Dataset 6, robot 1: pose NEES along the run, 100 particles")
+
+
+def run(data: Path, figure: Path | None = FIGURE, nees_figure: Path | None = NEES_FIGURE) -> str:
     rows = []
     with tempfile.TemporaryDirectory() as folder:
         log = Path(folder) / "mrclam1.log"
@@ -129,9 +159,11 @@ def run(data: Path, figure: Path | None = FIGURE) -> str:
                 f"| FastSLAM, {association} association | {mean['ate_rmse']:.2f} m "
                 f"| {mean['aligned_rmse']:.2f} m "
                 f"| {aligned['rmse']:.2f} m, {aligned['matched']} of 15 landmarks "
-                f"({len(result['landmarks'])} mapped) | {result['nees']['median']:.0f} "
-                f"| {result['nis']['mean']:.2f} | {100 * result['resampled_fraction']:.0f} % |"
+                f"({len(result['landmarks'])} mapped) | {result['nees']['median']:.3g} "
+                f"| {result['nis']['mean']:.2f} | {100 * result['resampled_fraction']:.1f} % |"
             )
+        if nees_figure is not None:
+            plot_nees_over_time(log, {a: Path(folder) / a for a in ("unknown", "known")}, nees_figure)
     return (
         "MRCLAM Dataset 6, robot 1, `configs/mrclam.toml`, 100 particles (`python experiments/mrclam/run.py`). "
         "Map: aligned landmarks within 0.5 m of a surveyed one; NEES: median over the records (consistent: 3); "
@@ -145,7 +177,8 @@ if __name__ == "__main__":
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--data", type=Path, default=ROOT.parent / "shared" / "data" / "mrclam" / "MRCLAM_Dataset6")
     parser.add_argument("--figure", type=Path, default=FIGURE, help="the unknown-association run's figure")
+    parser.add_argument("--nees-figure", type=Path, default=NEES_FIGURE, help="both runs' NEES along the log")
     arguments = parser.parse_args()
-    text = run(arguments.data.resolve(), arguments.figure.resolve())
+    text = run(arguments.data.resolve(), arguments.figure.resolve(), arguments.nees_figure.resolve())
     (HERE / "results.md").write_text(text)
     print(text)
