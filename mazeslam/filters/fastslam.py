@@ -246,7 +246,8 @@ class MeasurementModel:
         candidates: the landmark slots modelled, C of them.
         distance2: (P, K, C) squared Mahalanobis distance of the innovation under
             S = H Sigma H^T + R (+ Gx Sigma_x Gx^T with the pose's uncertainty), computed for the
-            pairs ``candidates.near`` only: elsewhere inf (as for slots the particle does not hold).
+            pairs ``candidates.near`` only: elsewhere inf (as for slots the particle does not hold,
+            and pairs the facing gate rules out).
         pairs: the observations and candidate columns (Q,) of those pairs, in ``near``'s order.
         pair_det: (P, Q) the determinant of S of each pair (``det`` spreads it over (P, K, C)).
     """
@@ -427,10 +428,18 @@ class FastSLAM:
         np.maximum.at(self._spreads, slots, spread)
 
     def _model(
-        self, observations: np.ndarray, noise: np.ndarray, candidates: Candidates, with_pose_uncertainty: bool
+        self,
+        observations: np.ndarray,
+        noise: np.ndarray,
+        candidates: Candidates,
+        with_pose_uncertainty: bool,
+        facings: np.ndarray | None = None,
     ) -> MeasurementModel:
         """The measurement model of the ``candidates`` at the current poses (see
         ``MeasurementModel``); ``with_pose_uncertainty`` adds the motion covariance not yet drawn.
+        With ``facings`` (K,) (rad, relative to the robot: the observed landmarks' directions), a
+        pair whose landmark faces more than ``facing_gate`` away from its observation is ruled out
+        (inf; a landmark or observation of unknown facing, NaN, is not).
         Written entry by entry, slot-major: (C, P) arrays, each slot's row of particles contiguous, so
         that a pair's row is one copied row (the 2x2 matrices never become arrays of their own)."""
         slots = candidates.slots
@@ -460,6 +469,9 @@ class FastSLAM:
         nu0 = observations[ks, 0, None] - rho[columns]
         nu1 = ekf.wrap(observations[ks, 1, None] - angle[columns])
         pair_distance2 = (t11 * nu0 * nu0 - 2 * t01 * nu0 * nu1 + t00 * nu1 * nu1) / pair_det
+        if facings is not None:  # NaN compares False: kept
+            apart = np.abs(ekf.wrap(self.poses[:, 2] + facings[ks, None] - self.facings.T[slots][columns]))
+            pair_distance2[apart > math.radians(self.params.facing_gate)] = np.inf
         distance2 = np.full((len(self.poses), len(observations), len(slots)), np.inf)
         distance2[:, ks, columns] = np.where(candidates.valid[:, columns], pair_distance2.T, np.inf)
         return MeasurementModel(candidates, distance2, (ks, columns), pair_det.T)
@@ -500,15 +512,15 @@ class FastSLAM:
         assigned = None
         if known and count:
             assigned = associate_known(np.asarray(ids), self.ids[:, :m], self.exists[:, :m])
+        gated = assigned is None and relative_facings is not None and self.params.facing_gate < 180
         model = self._model(
             observations,
             noise,
             self._candidates(observations, noise, m, assigned),
             self.proposal.carries_pose_uncertainty,
+            relative_facings if gated else None,
         )
         if assigned is None:
-            if relative_facings is not None and self.params.facing_gate < 180:
-                self._gate_by_facing(model, relative_facings)
             assigned = model.candidates.slots_of(associate_greedy(model.distance2, self.params.gate))
         # 2. The proposal's draw; the landmarks are then corrected at the drawn poses.
         self.poses, self.pose_covariances, joint = self.proposal.draw(
@@ -629,15 +641,6 @@ class FastSLAM:
         self.ids = np.concatenate([self.ids, np.full((p, m), -1, dtype=np.int64)], axis=1)
         self.facings = np.concatenate([self.facings, np.full((p, m), np.nan)], axis=1)
         self.reindex()
-
-    def _gate_by_facing(self, model: MeasurementModel, facings: np.ndarray) -> None:
-        """Rule out (inf in ``model.distance2`` (P, K, C)) every pair whose landmark faces more
-        than ``facing_gate`` away from the observation (``facings`` (K,) relative to the robot,
-        rad); landmarks or observations of unknown facing (NaN) are not ruled out."""
-        world = self.poses[:, None, 2] + facings[None, :]  # (P, K)
-        landmark = self.facings[:, model.candidates.slots]  # (P, C)
-        apart = np.abs(ekf.wrap(world[:, :, None] - landmark[:, None, :]))
-        model.distance2[apart > math.radians(self.params.facing_gate)] = np.inf  # NaN compares False: kept
 
     def _has_room(self, count: int) -> bool:
         """Every particle has ``count`` free slots (surely so when the slots beyond the used ones do)."""
