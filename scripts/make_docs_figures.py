@@ -52,6 +52,7 @@ FIGURES: list[tuple[str, str, str, float]] = [
     ("smooth_404", "experiments/smoother/smooth_404.png", "mazeslam simulate --seed 404 --out {tmp}/s404.log --quiet; mazeslam smooth {tmp}/s404.log --out {tmp}/smooth; copy {tmp}/smooth/smooth.png experiments/smoother/smooth_404.png", 0.5),  # noqa: E501
     ("blind_cloud", "experiments/blind_cloud/results/*/*.png experiments/blind_cloud/results/*/*.json experiments/blind_cloud/results/*/*.csv", "python experiments/blind_cloud/run.py", 0.5),  # noqa: E501
     ("consistency", "experiments/consistency/nees_over_time.png experiments/consistency/results.csv experiments/consistency/summary.md", "python experiments/consistency/run.py", 20.0),  # noqa: E501
+    ("consistency_held_out", "experiments/consistency/held_out/nees_over_time.png experiments/consistency/held_out/results.csv experiments/consistency/held_out/summary.md", "python experiments/consistency/run.py --seeds 21 22 23 24 25 26 27 28 29 30 31 32 33 34 35 36 37 38 39 40 --particles 100 1000 --versions 2 --out experiments/consistency/held_out", 15.0),  # noqa: E501
     ("carmen_grid", "experiments/carmen_grid/results/*_compare.png", "python experiments/carmen_grid/figures.py", 0.2),  # noqa: E501
     ("course_robot_sensor", "experiments/course_robot/sensor_comparison.png", "python experiments/course_robot/sensor_comparison.py", 1.0),  # noqa: E501
     ("course_robot_maps", "docs/img/course_log1_maps.png docs/img/course_sim_maps.png", "python experiments/course_robot/figures.py", 3.0),  # noqa: E501
