@@ -605,7 +605,7 @@ def calibrate(log_files, config_path, write_path, first_beam_angle, beam_directi
     try:
         lines = calibrate_logs(runs, config, progress=not quiet).settings()
     except ValueError as error:
-        raise click.ClickException(f"{', '.join(map(str, log_files))}: {error}") from error
+        raise click.ClickException(str(error)) from error  # it names the log
     text = "\n".join(lines) + "\n"
     click.echo(text, nl=False)
     if write_path:

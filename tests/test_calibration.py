@@ -2,6 +2,7 @@
 
 import dataclasses
 
+import numpy as np
 import pytest
 
 from mazeslam.envs.simulator import SimulationConfig
@@ -99,3 +100,25 @@ def test_the_calibrate_command_takes_several_logs_of_one_family(default_run):
     result = CliRunner().invoke(main, ["calibrate", log, log, "--quiet"])
     assert result.exit_code == 0, result.output
     assert f"measured by mazeslam calibrate on 2 logs ({log}, {log}) against truth" in result.output
+
+
+def test_pooled_residuals_number_each_logs_landmarks_and_updates_apart():
+    """Hand-made: two logs that both see their landmark 0 in updates 0 and 1. Pooled, log B's
+    landmark is another landmark and its updates do not follow log A's, so no repeat pair crosses
+    from one log to the other."""
+    from mazeslam.evaluation.calibration import Residuals, pooled_residuals
+
+    def residuals(error: float) -> Residuals:
+        return Residuals(
+            np.full((2, 2), error),
+            np.tile(np.eye(2), (2, 1, 1)),
+            np.array(["corner"] * 2),
+            np.zeros(2, int),
+            np.arange(2),
+        )
+
+    pooled = pooled_residuals([residuals(0.1), residuals(0.2)])
+    assert pooled.landmarks.tolist() == [0, 0, 1, 1]
+    assert pooled.updates.tolist() == [0, 1, 3, 4]
+    assert pooled.errors[:, 0].tolist() == [0.1, 0.1, 0.2, 0.2]
+    assert pooled.kinds.tolist() == ["corner"] * 4

@@ -11,7 +11,7 @@ loses most of its error under the similarity; a bend does not.
 
 Per log, the laser odometry (configs/carmen.toml's ``[scan_matching]``) against the reference:
 its path length over the reference's, and the median over the accepted intervals longer than
-0.2 m of its error along the reference's motion per metre (positive: longer).
+0.2 m of its error along the reference's motion as a share of the distance (positive: longer).
 
 Run: ``python experiments/carmen_grid/drift_checks.py`` after run.py (a few CPU minutes: the
 laser odometry of every log); writes ``results/drift_checks.md``.
@@ -115,7 +115,7 @@ def main() -> None:
         "rigid motion and after the best similarity (the scale range over the seeds, reference over estimate), the "
         "95th percentile of the heading error after the rigid motion; "
         "the laser odometry's path length over the reference's and its median error along the reference's "
-        "motion per metre over the accepted intervals.\n\n"
+        "motion as a share of the distance over the accepted intervals.\n\n"
         + summary.to_markdown(floatfmt=".4g")
         + "\n\nPer seed:\n\n"
         + per_seed.to_markdown(index=False, floatfmt=".4g")

@@ -80,7 +80,7 @@ def summary(table: pd.DataFrame) -> str:
     )
     return (
         "Simulated default mazes, default settings but the particle count and version. NEES: median over a "
-        f"run's records (consistent: 3, 95 % bound {POSE_BOUND_95:.2f}); NIS: mean over associated "
+        f"run's records (consistent: about 2.4, 95 % bound {POSE_BOUND_95:.2f}); NIS: mean over associated "
         "observations (consistent: 2); resampled: share of scans.\n\n" + shown.to_markdown(floatfmt=".3g") + "\n"
     )
 

@@ -35,6 +35,7 @@ def row(name: str, measured: Calibration) -> dict:
         "sigmaR [m]": seen.sigmaR,
         "sigmaB [rad]": seen.sigmaB,
         "odometry stretches": measured.motion.stretches,
+        "driven [m]": measured.motion.distance,
         "observations": seen.observations,
     }
 
@@ -56,7 +57,7 @@ def main() -> None:
         "together (every fit made once over all their odometry stretches and landmark observations). A single "
         "robot's non-negative fit can trade one odometry term for another (a 0 below); the pooled fit is the "
         "config's. `python experiments/mrclam/calibration.py`.\n\n"
-        + pd.DataFrame(rows).set_index("logs").to_markdown(floatfmt=["", *[".3g"] * 5, ".0f", ".0f"])
+        + pd.DataFrame(rows).set_index("logs").to_markdown(floatfmt=["", *[".3g"] * 5, ".0f", ".0f", ".0f"])
         + "\n"
     )
     (HERE / "calibration.md").write_text(text)

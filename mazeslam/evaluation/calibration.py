@@ -358,16 +358,25 @@ def calibrate(run: LoadedRun, config, progress: bool = False) -> Calibration:
 def calibrate_logs(runs: Sequence[LoadedRun], config, progress: bool = False) -> Calibration:
     """One setting for a family of logs (one robot's or one dataset's): each log measured as
     ``calibrate`` does, and every fit made once over all their stretches, residuals and walls
-    together, so that a log with more driving or more observations weighs more."""
+    together, so that a log with more driving or more observations weighs more. A ValueError
+    (a log without straight walls, logs that never drive) names the log, or the logs."""
     if not runs:
         raise ValueError("no log to calibrate")
-    measured = [_measure_log(run, config, progress) for run in runs]
+    measured = []
+    for run in runs:
+        try:
+            measured.append(_measure_log(run, config, progress))
+        except ValueError as problem:
+            raise ValueError(f"{run.path}: {problem}") from problem
     source = str(runs[0].path) if len(runs) == 1 else f"{len(runs)} logs ({', '.join(str(r.path) for r in runs)})"
     reference = "; ".join(sorted({m.reference for m in measured}))
     motion_source = "; ".join(sorted({m.motion_source for m in measured}))
     ranges = [m.range_noise for m in measured if m.range_noise is not None]
-    range_noise = pooled_range_noise(ranges) if ranges else None
-    motion = fit_noise(np.concatenate([m.stretches for m in measured]))
+    range_noise = (ranges[0] if len(ranges) == 1 else pooled_range_noise(ranges)) if ranges else None
+    try:
+        motion = fit_noise(np.concatenate([m.stretches for m in measured]))
+    except ValueError as problem:
+        raise ValueError(f"{source}: {problem}") from problem
     residuals = pooled_residuals([m.residuals for m in measured])
     try:
         return Calibration(source, reference, range_noise, motion, motion_source, fit_observation_noise(residuals))
