@@ -22,18 +22,22 @@ def test_ekf_update_of_a_scalar_is_the_weighted_average():
     assert s[0, 0, 0] == pytest.approx(5.0)
 
 
+@pytest.mark.parametrize("per_particle", [False, True], ids=["shared noise", "per-particle noise"])
 @pytest.mark.parametrize("state, observed", [(2, 2), (3, 2), (2, 1)])
-def test_ekf_update_entry_by_entry_equals_the_batched_matmul(state, observed):
+def test_ekf_update_entry_by_entry_equals_the_batched_matmul(state, observed, per_particle):
     rng = np.random.default_rng(state + observed)
     n = ekf.ENTRYWISE_FROM
     root = rng.normal(size=(n, state, state))
     covariance = root @ np.swapaxes(root, 1, 2) + np.eye(state)
     arguments = (rng.normal(size=(n, state)), covariance, rng.normal(size=(n, observed)))
     jacobian, noise = rng.normal(size=(n, observed, state)), np.eye(observed) * 0.1
-    for entrywise, batched in zip(
-        ekf.update(*arguments, jacobian, noise), ekf._update_batched(*arguments, jacobian, noise)
-    ):
+    if per_particle:  # R (n, k, k), each its own (as proposals.draw hands it a landmark's covariance plus R)
+        noise_root = rng.normal(size=(n, observed, observed))
+        noise = 0.1 * noise_root @ np.swapaxes(noise_root, 1, 2) + 0.01 * np.eye(observed)
+    updated = ekf.update(*arguments, jacobian, noise)
+    for entrywise, batched in zip(updated, ekf._update_batched(*arguments, jacobian, noise)):
         np.testing.assert_allclose(entrywise, batched, rtol=1e-10, atol=1e-12)
+    np.testing.assert_allclose(updated[2], jacobian @ covariance @ np.swapaxes(jacobian, 1, 2) + noise, rtol=1e-12)
     np.testing.assert_allclose(
         ekf.congruence(covariance, jacobian), jacobian @ covariance @ np.swapaxes(jacobian, 1, 2)
     )
