@@ -146,3 +146,34 @@ def test_nis_indexes_name_the_observation_they_belong_to():
     report = slam.update(np.array([[3.0, 1.5], [1.02, 0.01]]))
     assert report.nis_observations.tolist() == [1]
     assert report.nis == pytest.approx([0.02**2 / 2e-4 + 0.01**2 / 8e-4])
+
+
+def test_the_margin_rule_takes_the_largest_exponent_that_passes_every_check_in_turn():
+    """Hand-made NEES: at 100 particles 1.0 fails (12 > 10), 0.5 and 0.2 pass; at 1000 particles
+    0.5 fails (9 > 7.81) and 0.2 passes, so 0.2 is chosen, 0.1 is never run at 1000, and a
+    held-out row (not counted) that would fail 0.2 plays no part."""
+    import pandas as pd
+
+    from mazeslam.evaluation.consistency import choose_margin
+
+    nees = {(100, 1.0): [12, 3], (100, 0.5): [9, 2], (100, 0.2): [5, 4], (100, 0.1): [2, 2]}
+    nees |= {(1000, 0.5): [9, 1], (1000, 0.2): [7, 1]}
+    calls = []
+
+    def runs(exponents, particles):
+        calls.append((exponents, particles))
+        rows = [
+            {"likelihood_exponent": e, "median_nees": value, "held_out": False}
+            for e in exponents
+            for value in nees[(particles, e)]
+        ]
+        return pd.DataFrame(
+            rows + [{"likelihood_exponent": e, "median_nees": 99.0, "held_out": True} for e in exponents]
+        )
+
+    chosen, tables = choose_margin([1.0, 0.5, 0.2, 0.1], [(100, 10.0), (1000, 7.81)], runs, lambda t: ~t["held_out"])
+    assert chosen == 0.2
+    assert calls == [([1.0, 0.5, 0.2, 0.1], 100), ([0.5], 1000), ([0.2], 1000)]
+    assert len(tables) == 3
+    # counting the held-out rows too, nothing passes
+    assert choose_margin([1.0, 0.5, 0.2, 0.1], [(100, 10.0), (1000, 7.81)], runs)[0] is None

@@ -19,18 +19,25 @@ from pathlib import Path
 
 import pandas as pd
 
-from mazeslam.evaluation.consistency import POSE_BOUND_95
+from mazeslam.evaluation.consistency import POSE_BOUND_95, choose_margin
 
 HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE))
 from run import one_log  # noqa: E402  (this folder's runner: simulate, filter, score one seed)
 
 EXPONENTS = [1.0, 0.5, 0.35, 0.25, 0.15, 0.1]
-#: (particles, seeds, the bar the worst seed's median pose NEES must stay under), checked in order.
-CHECKS = [(100, list(range(11, 31)), 10.0), (1000, list(range(11, 21)), POSE_BOUND_95)]
+#: (particles, the bar the worst seed's median pose NEES must stay under), checked in order
+#: (``consistency.choose_margin``), and the seeds each particle count runs on.
+CHECKS = [(100, 10.0), (1000, POSE_BOUND_95)]
+SEEDS = {100: list(range(11, 31)), 1000: list(range(11, 21))}
 
 
-def runs(exponent: float, particles: int, seeds: list[int]) -> pd.DataFrame:
+def runs(exponents: list[float], particles: int) -> pd.DataFrame:
+    """``one_log`` over the particle count's ``SEEDS`` for each exponent, one row per seed."""
+    return pd.concat([runs_of(exponent, particles, SEEDS[particles]) for exponent in exponents])
+
+
+def runs_of(exponent: float, particles: int, seeds: list[int]) -> pd.DataFrame:
     """``one_log`` over ``seeds`` with ``likelihood_exponent`` set, one row per seed."""
     with ProcessPoolExecutor(2) as pool:
         rows = pool.map(
@@ -60,16 +67,7 @@ def summary(table: pd.DataFrame) -> pd.DataFrame:
 
 
 def main() -> None:
-    particles, seeds, bar = CHECKS[0]
-    tables = [runs(exponent, particles, seeds) for exponent in EXPONENTS]
-    candidates = [t["likelihood_exponent"].iloc[0] for t in tables if t["median_nees"].max() < bar]
-    chosen = None
-    for particles, seeds, bar in CHECKS[1:]:
-        for exponent in candidates:
-            tables.append(runs(exponent, particles, seeds))
-            if tables[-1]["median_nees"].max() < bar:
-                chosen = exponent
-                break
+    chosen, tables = choose_margin(EXPONENTS, CHECKS, runs)
     table = pd.concat(tables).drop(columns="nees")
     table.to_csv(HERE / "margin.csv", index=False, float_format="%.6g")
     text = (

@@ -26,7 +26,7 @@ from pathlib import Path
 
 import pandas as pd
 
-from mazeslam.evaluation.consistency import POSE_BOUND_95, nis_summary
+from mazeslam.evaluation.consistency import POSE_BOUND_95, choose_margin, nis_summary
 from mazeslam.evaluation.scoring import DEAD_RECKONING, FILTER_MEAN, score_run
 from mazeslam.imports.mrclam import import_mrclam
 from mazeslam.loaded_run import load_run
@@ -38,7 +38,8 @@ CONFIG = ROOT / "configs" / "mrclam.toml"
 EXPONENTS = [0.15, 0.1, 0.07, 0.05, 0.03, 0.02, 0.01, 0.005]
 CHOOSING_ROBOTS = [2, 3, 4, 5]
 HELD_OUT_ROBOT = 1
-#: (particles, the bar the worst choosing robot's median pose NEES must stay under), in order.
+#: (particles, the bar the worst choosing robot's median pose NEES must stay under), in order
+#: (``consistency.choose_margin``).
 CHECKS = [(100, 10.0), (1000, POSE_BOUND_95)]
 
 
@@ -72,17 +73,16 @@ def one_run(data: Path, robot: int, exponent: float, particles: int) -> dict:
     }
 
 
-def passing(table: pd.DataFrame, bar: float) -> list[float]:
-    """The exponents, largest first, whose worst choosing robot's median NEES in ``table`` is under ``bar``."""
-    worst = table[table["robot"].isin(CHOOSING_ROBOTS)].groupby("likelihood_exponent")["median_nees"].max()
-    return sorted(worst[worst < bar].index, reverse=True)
-
-
 def runs(pool: ProcessPoolExecutor, data: Path, exponents: list[float], particles: int) -> pd.DataFrame:
     """Every robot (the choosing ones and the held-out one) under each of ``exponents``."""
     jobs = [(robot, exponent) for exponent in exponents for robot in [*CHOOSING_ROBOTS, HELD_OUT_ROBOT]]
     robots, chosen = zip(*jobs)
     return pd.DataFrame(pool.map(one_run, [data] * len(jobs), robots, chosen, [particles] * len(jobs)))
+
+
+def choosing(table: pd.DataFrame) -> pd.Series:
+    """The rows of the robots the margin is chosen on (not the held-out one)."""
+    return table["robot"].isin(CHOOSING_ROBOTS)
 
 
 def summary(table: pd.DataFrame) -> pd.DataFrame:
@@ -110,17 +110,10 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--data", type=Path, default=ROOT.parent / "shared" / "data" / "mrclam" / "MRCLAM_Dataset6")
     data = parser.parse_args().data.resolve()
-    chosen = None
     with ProcessPoolExecutor(2) as pool:
-        (particles, bar), *later = CHECKS
-        tables = [runs(pool, data, EXPONENTS, particles)]
-        candidates = passing(tables[0], bar)
-        for particles, bar in later:
-            for exponent in candidates:
-                tables.append(runs(pool, data, [exponent], particles))
-                if passing(tables[-1], bar):
-                    chosen = exponent
-                    break
+        chosen, tables = choose_margin(
+            EXPONENTS, CHECKS, lambda exponents, particles: runs(pool, data, exponents, particles), choosing
+        )
     table = pd.concat(tables)
     table.to_csv(HERE / "margin.csv", index=False, float_format="%.6g")
     text = (

@@ -9,7 +9,13 @@ overconfident (its covariance too small); much smaller: underconfident.
 
 from __future__ import annotations
 
+from collections.abc import Callable, Sequence
+from typing import TYPE_CHECKING
+
 import numpy as np
+
+if TYPE_CHECKING:
+    import pandas as pd
 
 #: The chi-square 95 % points: the pose (3 dimensions) and an observation (range and bearing):
 #: ``scipy.stats.chi2.ppf(0.95, 3 or 2)`` written out, so that importing this module does not load
@@ -79,3 +85,48 @@ def map_orientation_spread(means: np.ndarray, exists: np.ndarray, weights: np.nd
     angles = np.arctan2(cross, dot)
     mean = np.average(angles, weights=weights)
     return float(np.sqrt(np.average((angles - mean) ** 2, weights=weights)))
+
+
+def choose_margin(
+    exponents: Sequence[float],
+    checks: Sequence[tuple[int, float]],
+    runs: Callable[[list[float], int], pd.DataFrame],
+    counted: Callable[[pd.DataFrame], pd.Series] | None = None,
+) -> tuple[float | None, list[pd.DataFrame]]:
+    """The rule that chooses a consistency margin (``[fastslam] likelihood_exponent``) from NEES alone.
+
+    1. Every exponent of ``exponents`` is run at the first check's particle count; those whose worst
+       run has a median pose NEES under the check's bar are the candidates, largest (the least
+       margin) first.
+    2. Each later check runs the candidates at its own particle count, largest first, until one
+       stays under its bar; that one is the only candidate left.
+
+    Args:
+        exponents: the exponents to try, largest first.
+        checks: (particle count, bar) pairs, in order.
+        runs: ``runs(exponents, particles)``: a table with one row per run and at least the columns
+            ``likelihood_exponent`` and ``median_nees``.
+        counted: which rows of a table count for the bars (a boolean Series); all by default (rows
+            left out are runs shown beside, such as a held-out log).
+
+    Returns the chosen exponent (None when none passes every check) and every table run, in order.
+    """
+    (particles, bar), *later = checks
+    tables = [runs(list(exponents), particles)]
+    candidates = _passing(tables[0], bar, counted)
+    for particles, bar in later:
+        survivors = []
+        for exponent in candidates:
+            tables.append(runs([exponent], particles))
+            if _passing(tables[-1], bar, counted):
+                survivors = [exponent]
+                break
+        candidates = survivors
+    return (candidates[0] if candidates else None), tables
+
+
+def _passing(table: pd.DataFrame, bar: float, counted) -> list[float]:
+    """The exponents of ``table``, largest first, whose counted runs' largest median NEES is under ``bar``."""
+    rows = table if counted is None else table[counted(table)]
+    worst = rows.groupby("likelihood_exponent")["median_nees"].max()
+    return sorted((float(exponent) for exponent in worst[worst < bar].index), reverse=True)
