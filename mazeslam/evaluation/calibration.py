@@ -84,7 +84,9 @@ def laser_range_noise(scans: np.ndarray, extractor: CornerExtractor) -> RangeNoi
 
 def pooled_range_noise(measured: Sequence[RangeNoise]) -> RangeNoise:
     """One range noise from several logs' (``laser_range_noise``): the variance pooled over all
-    their lines, each line weighing by its degrees of freedom (points - 2)."""
+    their lines, each line weighing by its degrees of freedom (points - 2); one log's as measured."""
+    if len(measured) == 1:
+        return measured[0]
     dof = [noise.points - 2 * noise.lines for noise in measured]
     variance = sum(noise.std**2 * n for noise, n in zip(measured, dof)) / sum(dof)
     return RangeNoise(math.sqrt(variance), sum(n.points for n in measured), sum(n.lines for n in measured))
@@ -372,7 +374,7 @@ def calibrate_logs(runs: Sequence[LoadedRun], config, progress: bool = False) ->
     reference = "; ".join(sorted({m.reference for m in measured}))
     motion_source = "; ".join(sorted({m.motion_source for m in measured}))
     ranges = [m.range_noise for m in measured if m.range_noise is not None]
-    range_noise = (ranges[0] if len(ranges) == 1 else pooled_range_noise(ranges)) if ranges else None
+    range_noise = pooled_range_noise(ranges) if ranges else None
     try:
         motion = fit_noise(np.concatenate([m.stretches for m in measured]))
     except ValueError as problem:
