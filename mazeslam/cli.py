@@ -725,6 +725,34 @@ def demo(out_dir, seed, quiet):
     click.echo("\n".join(run_demo(out_dir, seed=seed, progress=not quiet)))
 
 
+@main.command()
+@click.argument("trajectory", type=click.Path(exists=True, path_type=Path))
+@click.argument("relations_file", type=click.Path(exists=True, dir_okay=False, path_type=Path))
+@click.option(
+    "--reference",
+    type=click.Path(exists=True, path_type=Path),
+    help="A second trajectory scored the same way, e.g. the reference poses of `mazeslam import carmen` "
+    "(<log>.truth.csv); the ratio of the two is printed.",
+)
+@click.option(
+    "--max-time-gap",
+    type=POSITIVE,
+    default=0.05,
+    show_default=True,
+    help="A relation's time must lie this close to a pose's time [s].",
+)
+def relations(trajectory, relations_file, reference, max_time_gap):
+    """Score a trajectory by the relation metric of Kümmerle et al. (2009) against RELATIONS_FILE.
+
+    TRAJECTORY: a `mazeslam slam` output folder, its trajectory.csv, or a truth CSV (t,x,y,theta).
+    RELATIONS_FILE: one relation a line, `t1 t2 x y z roll pitch yaw`: the reference motion from the
+    pose at time t1 to the pose at t2, in the first pose's frame (the format of the benchmark's
+    hand-verified relations). Each time takes the pose nearest it."""
+    from mazeslam.relations_command import relations_lines
+
+    click.echo("\n".join(relations_lines(trajectory, relations_file, reference, max_time_gap)))
+
+
 #: The errors the command line reports as one line ``error: <message>`` (no traceback): bad input
 #: (a log, a config, a maze, a sweep file; a setting out of range), an output that cannot be
 #: written, a robot that went away, and any file the system refuses (OSError).

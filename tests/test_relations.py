@@ -2,9 +2,20 @@
 
 import numpy as np
 import pytest
+from click.testing import CliRunner
 
-from mazeslam.evaluation.relations import relation_errors, relation_metric, spatial_relations
-from mazeslam.geometry import compose
+from mazeslam.cli import main
+from mazeslam.config import InputError
+from mazeslam.evaluation.relations import (
+    pairs_at_times,
+    read_relations,
+    relation_errors,
+    relation_metric,
+    relations_metric,
+    spatial_relations,
+)
+from mazeslam.geometry import compose, relative
+from mazeslam.sidecars import write_trajectory, write_truth
 
 REFERENCE = np.array([[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [1.0, 1.0, np.pi / 2]])
 #: Pose 1 off by 0.2 m to its left, pose 2 turned 0.1 rad too far.
@@ -49,3 +60,85 @@ def test_bad_input_is_named():
         relation_errors(ESTIMATE[:, :2], REFERENCE, PAIRS)
     with pytest.raises(ValueError, match="no relations"):
         relation_metric(ESTIMATE, REFERENCE, np.zeros((0, 2), dtype=int))
+
+
+# --- relations files (the benchmark's text format) ---------------------------------------------------
+
+#: The times of REFERENCE's and ESTIMATE's three poses, s.
+TIMES = np.array([10.0, 10.5, 11.0])
+
+
+def _relations_text(pairs=PAIRS, times=TIMES, reference=REFERENCE) -> str:
+    """The relations of ``pairs`` written by hand from the reference poses: ``t1 t2 x y z roll pitch yaw``."""
+    lines = ["# t1 t2 x y z roll pitch yaw"]
+    for i, j in pairs:
+        x, y, yaw = relative(reference[i], reference[j])
+        lines.append(f"{times[i]:.3f} {times[j]:.3f} {x:.9f} {y:.9f} 0 0 0 {yaw:.9f}")
+    return "\n".join(lines) + "\n\n"
+
+
+def test_a_relations_file_scores_as_the_reference_poses_do(tmp_path):
+    path = tmp_path / "toy.relations"
+    path.write_text(_relations_text())
+    relations = read_relations(path)
+    np.testing.assert_array_equal(relations.lines, [2, 3, 4])
+    metric = relations_metric(TIMES, ESTIMATE, relations, max_gap=0.01)
+    assert metric == pytest.approx(relation_metric(ESTIMATE, REFERENCE, PAIRS), abs=1e-8)
+    assert metric["trans_mean"] == pytest.approx(0.4 / 3)
+    assert relations_metric(TIMES, REFERENCE, relations, max_gap=0.01)["trans_mean"] == pytest.approx(0, abs=1e-8)
+
+
+def test_relation_times_take_the_nearest_pose_and_the_last_of_a_shared_time(tmp_path):
+    # An odometry record at each scan's time before it (a wrong pose), and times off by 20 ms.
+    times = np.array([9.9, 10.0, 10.0, 10.5, 10.5, 11.0])
+    poses = np.array([[5.0, 5.0, 0.0], ESTIMATE[0], ESTIMATE[0], [7.0, 7.0, 1.0], ESTIMATE[1], ESTIMATE[2]])
+    path = tmp_path / "toy.relations"
+    path.write_text(_relations_text(times=TIMES + np.array([0.02, -0.02, 0.0])))
+    relations = read_relations(path)
+    np.testing.assert_array_equal(pairs_at_times(times, relations, max_gap=0.03), [[2, 4], [4, 5], [2, 5]])
+    assert relations_metric(times, poses, relations, max_gap=0.03)["trans_mean"] == pytest.approx(0.4 / 3)
+    with pytest.raises(InputError, match=r"toy.relations:2: no pose within 0.01 s of t = 10.020000 \(3 of 3"):
+        pairs_at_times(times, relations, max_gap=0.01)
+
+
+@pytest.mark.parametrize(
+    ("text", "message"),
+    [
+        ("1 2 0.5 0 0 0 0\n", r"bad.relations:1: a relation has 8 numbers .* got 7"),
+        ("# header\n1 2 0.5 0 0 0 0 x\n", r"bad.relations:2: not a number"),
+        ("1 2 nan 0 0 0 0 0\n", r"bad.relations:1: every value must be finite"),
+        ("# nothing\n\n", r"bad.relations: no relations"),
+    ],
+)
+def test_a_broken_relations_file_names_the_file_and_line(tmp_path, text, message):
+    path = tmp_path / "bad.relations"
+    path.write_text(text)
+    with pytest.raises(InputError, match=message):
+        read_relations(path)
+
+
+def test_the_relations_command_scores_a_run_folder_beside_a_reference(tmp_path):
+    folder = tmp_path / "run"
+    folder.mkdir()
+    write_trajectory(folder / "trajectory.csv", TIMES, ESTIMATE, np.zeros((3, 3, 3)))
+    # A reference 1 cm off on pose 1 (along x: it changes relations (0, 1) and (1, 2) by 1 cm each).
+    reference = REFERENCE + np.array([[0.0, 0.0, 0.0], [0.01, 0.0, 0.0], [0.0, 0.0, 0.0]])
+    write_truth(tmp_path / "reference.truth.csv", TIMES, reference)
+    (tmp_path / "toy.relations").write_text(_relations_text())
+    result = CliRunner().invoke(
+        main,
+        [
+            "relations",
+            str(folder),
+            str(tmp_path / "toy.relations"),
+            "--reference",
+            str(tmp_path / "reference.truth.csv"),
+        ],
+        catch_exceptions=False,
+    )
+    assert result.exit_code == 0, result.output
+    lines = result.output.splitlines()
+    assert "3 relations" in lines[0]
+    assert f"translation {0.4 / 3:.4f} ± {np.std([0.2, 0.2, 0.0]):.4f} m" in lines[1]
+    assert f"translation {0.02 / 3:.4f}" in lines[2]
+    assert f"translation x{(0.4 / 3) / (0.02 / 3):.2f}" in lines[3]

@@ -10,16 +10,23 @@ mean square) over the relations. Unlike the ATE it needs no global alignment, an
 once (a bent corridor) costs only the relations that span it.
 
 The paper takes its relations from manually verified scan matches between poses near each other
-in space (consecutive ones and loop closures). With only reference poses to go by (the CARMEN
-logs' corrected poses), ``spatial_relations`` takes every pair of scans whose reference positions
-are within a radius of each other: consecutive scans, and revisits of a place however far apart in
-time.
+in space (consecutive ones and loop closures), published as text files (``read_relations``: one
+relation a line, ``t1 t2 x y z roll pitch yaw``, the motion from the pose at time ``t1`` to the pose
+at ``t2`` in the first's frame); ``relations_metric`` scores a trajectory against such a file.
+With only reference poses to go by (the CARMEN logs' corrected poses), ``spatial_relations`` takes
+every pair of scans whose reference positions are within a radius of each other: consecutive
+scans, and revisits of a place however far apart in time.
 """
 
 from __future__ import annotations
 
+import math
+from dataclasses import dataclass
+from pathlib import Path
+
 import numpy as np
 
+from mazeslam.config import InputError, read_text
 from mazeslam.geometry import relative, wrap_angle
 
 #: Relation radius for building logs with a scan about every metre (the CARMEN logs), m: the few
@@ -53,18 +60,31 @@ def relation_errors(estimate: np.ndarray, reference: np.ndarray, pairs: np.ndarr
             f"estimate and reference must both be (S, 3) poses, got {estimate.shape} and {reference.shape}"
         )
     pairs = np.asarray(pairs, dtype=int).reshape(-1, 2)
-    ours = relative(estimate[pairs[:, 0]], estimate[pairs[:, 1]]).reshape(-1, 3)
-    theirs = relative(reference[pairs[:, 0]], reference[pairs[:, 1]]).reshape(-1, 3)
+    return motion_errors(_motions(estimate, pairs), _motions(reference, pairs))
+
+
+def _motions(poses: np.ndarray, pairs: np.ndarray) -> np.ndarray:
+    """The motion (K, 3) from pose ``i`` to pose ``j`` of each pair (K, 2), in pose ``i``'s frame."""
+    return relative(poses[pairs[:, 0]], poses[pairs[:, 1]]).reshape(-1, 3)
+
+
+def motion_errors(ours: np.ndarray, theirs: np.ndarray) -> np.ndarray:
+    """The error ``theirs (-) ours`` (K, 3) of estimated relative motions ``ours`` (K, 3) against the
+    reference's ``theirs`` (K, 3) (x m, y m, theta rad; heading wrapped to [-pi, pi))."""
     errors = relative(theirs, ours).reshape(-1, 3)
     errors[:, 2] = wrap_angle(errors[:, 2])
     return errors
 
 
 def relation_metric(estimate: np.ndarray, reference: np.ndarray, pairs: np.ndarray) -> dict[str, float]:
-    """Kümmerle et al.'s metric over the relations ``pairs`` (K, 2): the mean, standard deviation
-    and mean square of the translational errors (m, m^2) and of the rotational errors (rad,
-    rad^2), and the relation count. Estimate and reference are (S, 3) poses (see ``relation_errors``)."""
-    errors = relation_errors(estimate, reference, pairs)
+    """Kümmerle et al.'s metric over the relations ``pairs`` (K, 2) (see ``error_summary``).
+    Estimate and reference are (S, 3) poses (see ``relation_errors``)."""
+    return error_summary(relation_errors(estimate, reference, pairs))
+
+
+def error_summary(errors: np.ndarray) -> dict[str, float]:
+    """The metric of relation errors (K, 3): the mean, standard deviation and mean square of the
+    translational errors (m, m^2) and of the rotational errors (rad, rad^2), and the relation count."""
     if len(errors) == 0:
         raise ValueError("no relations to score")
     translation, rotation = np.hypot(errors[:, 0], errors[:, 1]), np.abs(errors[:, 2])
@@ -77,3 +97,85 @@ def relation_metric(estimate: np.ndarray, reference: np.ndarray, pairs: np.ndarr
         "rot_std": float(rotation.std()),
         "rot_sq_mean": float(np.mean(rotation**2)),
     }
+
+
+@dataclass(frozen=True)
+class Relations:
+    """Relations read from a file (``read_relations``).
+
+    Attributes:
+        first, second: (K,) the times of each relation's two poses, s.
+        motions: (K, 3) the reference motion from the first pose to the second, in the first
+            pose's frame (x m, y m, yaw rad).
+        lines: (K,) each relation's line in the file (1-based), for messages.
+        source: the file's name.
+    """
+
+    first: np.ndarray
+    second: np.ndarray
+    motions: np.ndarray
+    lines: np.ndarray
+    source: str
+
+
+def read_relations(path: str | Path) -> Relations:
+    """Read a relations file in the text format of Kümmerle et al.'s benchmark: one relation a line,
+    ``t1 t2 x y z roll pitch yaw`` (s, s, m, m, m, rad, rad, rad); z, roll and pitch are ignored (2-D).
+    Blank lines and lines starting with ``#`` are skipped. Errors name the file and the line."""
+    text = read_text(Path(path), "relations file")
+    rows, lines = [], []
+    for number, line in enumerate(text.splitlines(), start=1):
+        fields = line.split()
+        if not fields or fields[0].startswith("#"):
+            continue
+        if len(fields) != 8:
+            raise InputError(f"{path}:{number}: a relation has 8 numbers t1 t2 x y z roll pitch yaw, got {len(fields)}")
+        try:
+            values = [float(field) for field in fields]
+        except ValueError:
+            raise InputError(f"{path}:{number}: not a number in {line.strip()[:60]!r}") from None
+        if not all(math.isfinite(value) for value in values):
+            raise InputError(f"{path}:{number}: every value must be finite")
+        rows.append(values)
+        lines.append(number)
+    if not rows:
+        raise InputError(f"{path}: no relations in the file")
+    table = np.array(rows)
+    return Relations(table[:, 0], table[:, 1], table[:, [2, 3, 7]], np.array(lines), str(path))
+
+
+def pairs_at_times(times: np.ndarray, relations: Relations, max_gap: float) -> np.ndarray:
+    """For each relation, the indexes (K, 2) of the poses at ``times`` (R,) (s, non-decreasing)
+    nearest its two times. A relation time with no pose within ``max_gap`` s is an error naming its
+    line (a run that ended early, or another log's relations)."""
+    times = np.asarray(times, dtype=float)
+    if len(times) == 0:
+        raise InputError("no poses to score")
+    pairs = np.column_stack([_nearest(times, relations.first), _nearest(times, relations.second)])
+    gaps = np.abs(times[pairs] - np.column_stack([relations.first, relations.second]))
+    missing = np.flatnonzero(gaps.max(axis=1) > max_gap)
+    if len(missing):
+        row = missing[0]
+        wanted = relations.first[row] if gaps[row, 0] > max_gap else relations.second[row]
+        raise InputError(
+            f"{relations.source}:{relations.lines[row]}: no pose within {max_gap:g} s of t = {wanted:.6f} "
+            f"({len(missing)} of {len(pairs)} relations so; the poses span {times[0]:.6f}-{times[-1]:.6f} s)"
+        )
+    return pairs
+
+
+def _nearest(times: np.ndarray, wanted: np.ndarray) -> np.ndarray:
+    """Index (K,) of the entry of sorted ``times`` (R,) nearest each of ``wanted`` (K,); of entries
+    sharing that time, the last: the latest estimate at that time (a log's scan record comes after
+    the odometry record of its time, and a relation refers to the scan)."""
+    after = np.searchsorted(times, wanted, side="right")
+    before, after = np.maximum(after - 1, 0), np.minimum(after, len(times) - 1)
+    later = np.abs(times[after] - wanted) < np.abs(wanted - times[before])
+    return np.searchsorted(times, np.where(later, times[after], times[before]), side="right") - 1
+
+
+def relations_metric(times: np.ndarray, poses: np.ndarray, relations: Relations, max_gap: float) -> dict[str, float]:
+    """Kümmerle et al.'s metric (``error_summary``) of the poses (R, 3) at ``times`` (R,) (s; x m,
+    y m, theta rad, any world frame) against a relations file's reference motions."""
+    pairs = pairs_at_times(times, relations, max_gap)
+    return error_summary(motion_errors(_motions(np.asarray(poses, dtype=float), pairs), relations.motions))
