@@ -51,27 +51,123 @@ def test_repeated_observations_shrink_the_landmark_like_an_average():
     np.testing.assert_allclose(np.linalg.det(covariances[0]), np.linalg.det(first.landmarks()[1][0]) / 50**2, rtol=0.2)
 
 
+def explicit_distance2(slam: FastSLAM, observations, noise, with_pose_uncertainty: bool) -> np.ndarray:
+    """(P, K, M) squared Mahalanobis distance of every observation to every slot of every particle,
+    from the explicit matrices: S = H Sigma H^T (+ Gx Sigma_x Gx^T) + R, nu^T S^-1 nu."""
+    dx = slam.means[:, None, :, 0] - slam.poses[:, None, None, 0]  # (P, 1, M)
+    dy = slam.means[:, None, :, 1] - slam.poses[:, None, None, 1]
+    q, zero = dx**2 + dy**2, np.zeros_like(dx)
+    rho = np.sqrt(q)
+    h = np.stack([np.stack([dx / rho, dy / rho], -1), np.stack([-dy / q, dx / q], -1)], -2)  # (P, 1, M, 2, 2)
+    s = h @ slam.covariances[:, None] @ np.swapaxes(h, -1, -2) + noise[None, :, None]
+    if with_pose_uncertainty:
+        gx = np.stack([np.stack([-dx / rho, -dy / rho, zero], -1), np.stack([dy / q, -dx / q, zero - 1], -1)], -2)
+        s = s + gx @ slam.pose_covariances[:, None, None] @ np.swapaxes(gx, -1, -2)
+    bearing = np.arctan2(dy, dx) - slam.poses[:, None, None, 2]
+    nu = np.stack(
+        [observations[None, :, None, 0] - rho, np.angle(np.exp(1j * (observations[None, :, None, 1] - bearing)))], -1
+    )
+    return np.einsum("pkmi,pkmi->pkm", nu, np.linalg.solve(s, nu[..., None])[..., 0])
+
+
 @pytest.mark.parametrize("version", [1, 2])
-def test_landmarks_left_out_of_the_model_could_not_have_mattered(version):
-    """The spatial index keeps every landmark that is within the new-landmark gate of an observation."""
+@pytest.mark.parametrize("mixed", [False, True])
+def test_landmarks_left_out_of_the_model_could_not_have_mattered(version, mixed):
+    """The spatial index keeps every observation-slot pair, and the cull within the pairs every
+    particle's landmark, that is within the new-landmark gate; what it keeps is modelled as the
+    explicit matrices give. ``mixed``: as in a maze, where corners lie a few centimetres apart and
+    particles' slots hold different ones of them, each slot holds one of four landmarks 4 cm apart
+    in each particle."""
     rng = np.random.default_rng(version)
-    params = FastSLAMParams(NPARTICLES=50, version=version, seed=version)
+    p = 50
+    params = FastSLAMParams(NPARTICLES=p, version=version, seed=version)
     slam = FastSLAM(params, capacity=64)
-    slam.exists[:, :60] = True
-    slam.means[:, :60] = rng.uniform(-3, 3, (60, 2)) + rng.normal(0, 0.02, (50, 60, 2))  # particles' maps agree
-    slam.poses += rng.normal(0, [0.03, 0.03, 0.1], (50, 3))
-    slam.covariances[:, :60] = np.eye(2) * rng.uniform(1e-5, 5e-3, (50, 60, 1, 1))
+    slam.exists[:, :60] = rng.uniform(size=(p, 60)) < 0.9
+    slam.means[:, :60] = rng.uniform(-3, 3, (60, 2)) + rng.normal(0, 0.02, (p, 60, 2))  # particles' maps agree
+    if mixed:
+        slam.means[:, :60] += 0.04 * rng.integers(0, 2, (p, 60, 2))
+    slam.poses += rng.normal(0, [0.03, 0.03, 0.1], (p, 3))
+    slam.covariances[:, :60] = np.eye(2) * rng.uniform(1e-5, 5e-3, (p, 60, 1, 1))
     slam.pose_covariances[:] = [[1e-3, 2e-4, 3e-4], [2e-4, 2e-3, -1e-4], [3e-4, -1e-4, 1e-2]]
     slam.reindex()
     observations = np.column_stack([rng.uniform(0.05, 0.8, 6), rng.uniform(-math.pi, math.pi, 6)])
     noise = params.observation_noise(np.tile(np.diag([1e-4, 1e-2]), (6, 1, 1)), 6)
+    truth = explicit_distance2(slam, observations, noise, version == 2)[:, :, :60]
     culled = slam._candidates(observations, noise, 60)
-    every_slot = Candidates(np.arange(60), slam.exists[:, :60], np.ones((6, 60), dtype=bool))
-    everything = slam._model(observations, noise, every_slot, version == 2)
-    left_out = np.ones((6, 60), dtype=bool)  # observation-slot pairs not modelled
-    left_out[:, culled.slots] = ~culled.near
-    assert left_out.mean() > 0.6  # the index does cull
-    assert everything.distance2[:, left_out].min() >= params.new_landmark_gate
+    model = slam._model(observations, noise, culled, version == 2)
+    modelled = np.zeros((p, 6, 60), dtype=bool)  # particle-observation-slot triples computed
+    modelled[:, :, culled.slots] = np.isfinite(model.distance2)
+    held = slam.exists[:, None, :60]
+    near = np.zeros((6, 60), dtype=bool)
+    near[:, culled.slots] = culled.near
+    assert (~near).mean() > 0.6  # the index culls pairs
+    assert (held & near & ~modelled).sum() > 0.1 * (held & near).sum()  # and particles within the pairs
+    assert truth[held & ~modelled].min() >= params.new_landmark_gate
+    np.testing.assert_allclose(model.distance2[modelled[:, :, culled.slots]], truth[modelled], rtol=1e-9)
+    # Without the cull within the pairs (no points), the same pairs hold the same values where both compute.
+    whole_pairs = Candidates(culled.slots, culled.valid, culled.near)
+    unculled = slam._model(observations, noise, whole_pairs, version == 2).distance2
+    assert np.array_equal(unculled[np.isfinite(model.distance2)], model.distance2[np.isfinite(model.distance2)])
+    assert unculled[np.isinf(model.distance2)].min() >= params.new_landmark_gate
+
+
+def two_particles_one_slot(second_landmark_x: float, association: str = "unknown") -> FastSLAM:
+    """Two particles at the origin facing +x (FastSLAM 1.0: no pose uncertainty), whose slot 0 holds
+    a landmark at (1, 0) in particle 0 and at (``second_landmark_x``, 0) in particle 1, of
+    covariance 0.005^2 I, identity 7; the sensor noise is 0.005 m and 0.005 rad."""
+    params = dataclasses.replace(EXACT, NPARTICLES=2, version=1, sigmaR=0.005, sigmaB=0.005, association=association)
+    slam = FastSLAM(params)
+    slam.exists[:, 0] = True
+    slam.means[:, 0] = [[1.0, 0.0], [second_landmark_x, 0.0]]
+    slam.covariances[:, 0] = 0.005**2 * np.eye(2)
+    slam.ids[:, 0] = 7
+    slam.reindex()
+    return slam
+
+
+@pytest.mark.parametrize(
+    ("second_landmark_x", "kept"),
+    [(1.06, False), (1.04, True), (1.02, True)],
+)
+def test_a_particle_whose_landmark_is_beyond_reach_is_left_out_of_its_pair(second_landmark_x, kept):
+    """One observation at range 1 m, bearing 0: at (1, 0) in both particles, so the pair is near by
+    the slot's box (x 1 to second_landmark_x). In particle 1 the landmark lies dx = x - 1 away
+    along the beam: innovation (-dx, 0), S_00 = 0.005^2 + 0.005^2, so its squared Mahalanobis
+    distance is dx^2 / 5e-5: 72 at 6 cm, 32 at 4 cm, 8 at 2 cm. The pair's reach (``_reach``, new-landmark
+    gate 16) is 4.99 cm here: the 6 cm one is left out (beyond the gate, as 72 is), the 4 cm one
+    modelled although beyond the gate too (the bound is not tight), the 2 cm one modelled."""
+    slam = two_particles_one_slot(second_landmark_x)
+    observation, noise = np.array([[1.0, 0.0]]), slam.params.observation_noise(None, 1)
+    candidates = slam._candidates(observation, noise, 1)
+    assert candidates.near.tolist() == [[True]]
+    np.testing.assert_allclose(candidates.reach2, [[0.049915**2]], rtol=1e-4)
+    rows, ks, columns = slam._modelled(candidates)
+    assert rows.tolist() == ([0, 1] if kept else [0]) and ks.tolist() == columns.tolist() == [0] * len(rows)
+    expected = (second_landmark_x - 1.0) ** 2 / 5e-5
+    model = slam._model(observation, noise, candidates, False)
+    assert model.distance2[0, 0, 0] == 0.0
+    if kept:
+        np.testing.assert_allclose(model.distance2[1, 0, 0], expected, rtol=1e-9)
+    else:
+        assert model.distance2[1, 0, 0] == np.inf and expected >= slam.params.new_landmark_gate
+    # The update decides as it would with the distance: particle 1 matches only at 2 cm, else starts a landmark.
+    report = slam.update(observation)
+    assert (report.matched, report.new) == ((2, 0) if second_landmark_x == 1.02 else (1, 1))
+
+
+def test_known_association_models_its_slot_beyond_reach():
+    """Known association weighs an observation by its own landmark however far: particle 1's landmark
+    7, 6 cm off, is modelled although beyond the pair's reach (squared distance 72)."""
+    slam = two_particles_one_slot(1.06, association="known")
+    observation, noise = np.array([[1.0, 0.0]]), slam.params.observation_noise(None, 1)
+    assigned = np.zeros((2, 1), dtype=np.int64)
+    model = slam._model(observation, noise, slam._candidates(observation, noise, 1, assigned), False)
+    np.testing.assert_allclose(model.distance2[:, 0, 0], [0.0, 72.0], rtol=1e-9)
+    s_11 = (
+        0.005**2 / np.array([1.0, 1.06]) ** 2 + 0.005**2
+    )  # bearing variance: the landmark's over range^2 + the sensor's
+    np.testing.assert_allclose(model.det[:, 0, 0], 5e-5 * s_11, rtol=1e-9)
+    assert slam.update(observation, ids=np.array([7])).matched == 2
 
 
 def test_association_is_by_mahalanobis_distance_not_by_metres():

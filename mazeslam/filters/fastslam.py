@@ -220,11 +220,21 @@ class Candidates:
         valid: (P, C) the particle holds a landmark in that slot.
         near: (K, C) the observation-slot pairs that can matter; the others are beyond the
             new-landmark gate in every particle.
+        points: (2, K, P) where each particle puts each observation (x and y, metres, world
+            frame), or None: then every particle holding the slot of a ``near`` pair is modelled.
+        reach2: (K, C) squared metres, with ``points``: a particle whose landmark of the pair lies
+            this far or farther from where it puts the observation has the pair beyond the
+            new-landmark gate (``FastSLAM._reach``); 0 outside ``near``.
+        forced: (P, K) the candidate column modelled for each particle and observation whatever
+            its distance (known association's slots; -1: none), or None.
     """
 
     slots: np.ndarray
     valid: np.ndarray
     near: np.ndarray
+    points: np.ndarray | None = None
+    reach2: np.ndarray | None = None
+    forced: np.ndarray | None = None
 
     def slots_of(self, columns: np.ndarray) -> np.ndarray:
         """Slots (P, K) of candidate ``columns`` (P, K) (-1 stays -1)."""
@@ -246,24 +256,24 @@ class MeasurementModel:
         candidates: the landmark slots modelled, C of them.
         distance2: (P, K, C) squared Mahalanobis distance of the innovation under
             S = H Sigma H^T + R (+ Gx Sigma_x Gx^T with the pose's uncertainty), computed for the
-            pairs ``candidates.near`` only: elsewhere inf (as for slots the particle does not hold,
-            and pairs the facing gate rules out).
-        pairs: the observations and candidate columns (Q,) of those pairs, in ``near``'s order.
-        pair_det: (P, Q) the determinant of S of each pair (``det`` spreads it over (P, K, C)).
+            particle-observation-slot triples ``FastSLAM._modelled`` keeps only: elsewhere inf
+            (slots the particle does not hold, pairs beyond the new-landmark gate in that
+            particle, and pairs the facing gate rules out).
+        triples: (E,) the flat indexes into ``distance2`` of the triples computed.
+        triple_det: (E,) the determinant of S of each (``det`` spreads it over (P, K, C)).
     """
 
     candidates: Candidates
     distance2: np.ndarray
-    pairs: tuple[np.ndarray, np.ndarray]
-    pair_det: np.ndarray
+    triples: np.ndarray
+    triple_det: np.ndarray
 
     @property
     def det(self) -> np.ndarray:
-        """(P, K, C) the determinant of S, NaN outside the pairs (made when asked for: only FastSLAM
-        1.0's weights use it)."""
+        """(P, K, C) the determinant of S, NaN outside the triples (made when asked for: only
+        FastSLAM 1.0's weights use it)."""
         det = np.full(self.distance2.shape, np.nan)
-        ks, columns = self.pairs
-        det[:, ks, columns] = self.pair_det
+        det.reshape(-1)[self.triples] = self.triple_det
         return det
 
 
@@ -349,17 +359,24 @@ class FastSLAM:
             return Candidates(
                 np.zeros(0, dtype=np.int64), np.zeros((p, 0), dtype=bool), np.zeros((len(observations), 0), dtype=bool)
             )
-        angle = self.poses[:, None, 2] + observations[None, :, 1]  # (P, K)
-        x = self.poses[:, None, 0] + observations[None, :, 0] * np.cos(angle)
-        y = self.poses[:, None, 1] + observations[None, :, 0] * np.sin(angle)
-        low = np.column_stack([x.min(axis=0), y.min(axis=0)])  # (K, 2): each observation's box
-        high = np.column_stack([x.max(axis=0), y.max(axis=0)])
-        near = self._gaps(low, high, m) < self._reach(observations, noise, m) ** 2  # (m, K)
+        angle = self.poses[None, :, 2] + observations[:, None, 1]  # (K, P)
+        x = self.poses[None, :, 0] + observations[:, None, 0] * np.cos(angle)
+        y = self.poses[None, :, 1] + observations[:, None, 0] * np.sin(angle)
+        low = np.column_stack([x.min(axis=1), y.min(axis=1)])  # (K, 2): each observation's box
+        high = np.column_stack([x.max(axis=1), y.max(axis=1)])
+        reach2 = self._reach(observations, noise, m) ** 2  # (m, K)
+        near = self._gaps(low, high, m) < reach2
         if assigned is not None:
             rows, ks = np.nonzero(assigned >= 0)
             near[assigned[rows, ks], ks] = True
         columns = np.flatnonzero(near.any(axis=1))
-        return Candidates(columns, self.exists[:, columns], near[columns].T)
+        near = near[columns].T
+        candidates = Candidates(
+            columns, self.exists[:, columns], near, np.stack([x, y]), np.where(near, reach2[columns].T, 0.0)
+        )
+        if assigned is not None:
+            candidates.forced = candidates.columns_of(assigned)
+        return candidates
 
     def _reach(self, observations: np.ndarray, noise: np.ndarray, m: int) -> np.ndarray:
         """(m, K) metres: a landmark of slot j farther than this from where observation k puts it
@@ -427,6 +444,39 @@ class FastSLAM:
             reduce.at(self._boxes[:, column], slots, values)
         np.maximum.at(self._spreads, slots, spread)
 
+    def _modelled(self, candidates: Candidates) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The particle-observation-slot triples of ``candidates`` to model, as particles,
+        observations and candidate columns (E,) each: the particle holds the slot's landmark, the
+        pair is ``near``, and (with ``candidates.points``) the landmark lies nearer than the pair's
+        reach to where the particle puts the observation (otherwise the pair is beyond the
+        new-landmark gate in that particle: ``_reach``), or the column is ``forced``.
+        A few operations per particle of each near pair, on (Q, P) arrays (each pair's particles
+        one contiguous row)."""
+        p = len(self.poses)
+        ks, columns = np.nonzero(candidates.near)  # the Q pairs
+        wanted = np.ascontiguousarray(candidates.valid.T)[columns]  # (Q, P)
+        points, reach2 = candidates.points, candidates.reach2
+        if points is not None and reach2 is not None:
+            means = np.take(self.means, candidates.slots, axis=1).transpose(2, 1, 0).copy()  # (2, C, P)
+            gap = points[0, ks] - means[0, columns]
+            gap_y = points[1, ks] - means[1, columns]
+            gap *= gap
+            gap_y *= gap_y
+            gap += gap_y
+            wanted &= gap < reach2[ks, columns, None]
+        pairs, rows = np.divmod(np.flatnonzero(wanted), p)
+        ks, columns = ks[pairs], columns[pairs]
+        if candidates.forced is not None:  # added, each triple once
+            forced_rows, forced_ks = np.nonzero(candidates.forced >= 0)
+            k, c = candidates.near.shape
+            flat = np.union1d(
+                (rows * k + ks) * c + columns,
+                (forced_rows * k + forced_ks) * c + candidates.forced[forced_rows, forced_ks],
+            )
+            rows, rest = np.divmod(flat, k * c)
+            ks, columns = np.divmod(rest, c)
+        return rows, ks, columns
+
     def _model(
         self,
         observations: np.ndarray,
@@ -440,41 +490,45 @@ class FastSLAM:
         With ``facings`` (K,) (rad, relative to the robot: the observed landmarks' directions), a
         pair whose landmark faces more than ``facing_gate`` away from its observation is ruled out
         (inf; a landmark or observation of unknown facing, NaN, is not).
-        Written entry by entry, slot-major: (C, P) arrays, each slot's row of particles contiguous, so
-        that a pair's row is one copied row (the 2x2 matrices never become arrays of their own)."""
-        slots = candidates.slots
-        means = self.means.transpose(1, 0, 2)[slots]  # (C, P, 2)
-        dx, dy = means[..., 0] - self.poses[:, 0], means[..., 1] - self.poses[:, 1]
+        Computed for the triples ``_modelled`` keeps only, each one entry of flat (E,) arrays (the
+        2x2 matrices written entry by entry; the landmarks gathered by flat index), so that the
+        cost follows the landmarks near each particle's observations, not the candidate slots."""
+        rows, ks, columns = self._modelled(candidates)
+        at = rows * self.means.shape[1] + candidates.slots[columns]  # flat (particle, slot) indexes
+        poses = np.take(self.poses.T, rows, axis=1)  # (3, E)
+        if (
+            facings is not None
+        ):  # first, so that the rest is computed for the triples it keeps; NaN compares False: kept
+            apart = np.abs(ekf.wrap(poses[2] + facings[ks] - np.take(self.facings, at)))
+            kept = np.flatnonzero(~(apart > math.radians(self.params.facing_gate)))
+            rows, ks, columns, at, poses = rows[kept], ks[kept], columns[kept], at[kept], poses[:, kept]
+        means = np.take(self.means.reshape(-1, 2), at, axis=0).T  # (2, E)
+        dx, dy = means[0] - poses[0], means[1] - poses[1]
         q = np.maximum(dx * dx + dy * dy, 1e-12)
         rho = np.sqrt(q)
         a, b, c, d = dx / rho, dy / rho, -dy / q, dx / q  # H = d(range, bearing)/d(landmark)
-        sigma = self.covariances.transpose(1, 0, 2, 3)[slots]  # (C, P, 2, 2)
-        s00, s01, s11 = sigma[..., 0, 0], sigma[..., 0, 1], sigma[..., 1, 1]
+        s00, s01, _, s11 = np.take(self.covariances.reshape(-1, 4), at, axis=0).T
         if with_pose_uncertainty:  # Gx = -[H | (0, 1)^T]: the pose's position adds to the landmark's covariance
-            pose = self.pose_covariances  # (P, 3, 3)
-            s00, s01, s11 = s00 + pose[:, 0, 0], s01 + pose[:, 0, 1], s11 + pose[:, 1, 1]
+            pose = self.pose_covariances.reshape(-1, 9)[:, [0, 1, 4, 2, 5, 8]].T  # (6, P): 00 01 11 02 12 22
+            p00, p01, p11, p02, p12, p22 = np.take(pose, rows, axis=1)
+            s00, s01, s11 = s00 + p00, s01 + p01, s11 + p11
         t00 = a * a * s00 + 2 * a * b * s01 + b * b * s11
         t01 = a * c * s00 + (a * d + b * c) * s01 + b * d * s11
         t11 = c * c * s00 + 2 * c * d * s01 + d * d * s11
         if with_pose_uncertainty:
-            t01 = t01 + a * pose[:, 0, 2] + b * pose[:, 1, 2]
-            t11 = t11 + 2 * (c * pose[:, 0, 2] + d * pose[:, 1, 2]) + pose[:, 2, 2]
-        angle = np.arctan2(dy, dx) - self.poses[:, 2]  # predicted bearing, unwrapped
-        # Only the observation-slot pairs near each other, each (Q, P).
-        ks, columns = np.nonzero(candidates.near)
-        t00 = t00[columns] + noise[ks, 0, 0, None]
-        t01 = t01[columns] + noise[ks, 0, 1, None]
-        t11 = t11[columns] + noise[ks, 1, 1, None]
-        pair_det = t00 * t11 - t01 * t01
-        nu0 = observations[ks, 0, None] - rho[columns]
-        nu1 = ekf.wrap(observations[ks, 1, None] - angle[columns])
-        pair_distance2 = (t11 * nu0 * nu0 - 2 * t01 * nu0 * nu1 + t00 * nu1 * nu1) / pair_det
-        if facings is not None:  # NaN compares False: kept
-            apart = np.abs(ekf.wrap(self.poses[:, 2] + facings[ks, None] - self.facings.T[slots][columns]))
-            pair_distance2[apart > math.radians(self.params.facing_gate)] = np.inf
-        distance2 = np.full((len(self.poses), len(observations), len(slots)), np.inf)
-        distance2[:, ks, columns] = np.where(candidates.valid[:, columns], pair_distance2.T, np.inf)
-        return MeasurementModel(candidates, distance2, (ks, columns), pair_det.T)
+            t01 = t01 + a * p02 + b * p12
+            t11 = t11 + 2 * (c * p02 + d * p12) + p22
+        t00 = t00 + noise[ks, 0, 0]
+        t01 = t01 + noise[ks, 0, 1]
+        t11 = t11 + noise[ks, 1, 1]
+        det = t00 * t11 - t01 * t01
+        nu0 = observations[ks, 0] - rho
+        nu1 = ekf.wrap(observations[ks, 1] - (np.arctan2(dy, dx) - poses[2]))  # the predicted bearing unwrapped
+        shape = (len(self.poses), len(observations), len(candidates.slots))
+        triples = (rows * shape[1] + ks) * shape[2] + columns
+        distance2 = np.full(shape, np.inf)
+        distance2.reshape(-1)[triples] = (t11 * nu0 * nu0 - 2 * t01 * nu0 * nu1 + t00 * nu1 * nu1) / det
+        return MeasurementModel(candidates, distance2, triples, det)
 
     # -- update -------------------------------------------------------------------------------
     def update(
