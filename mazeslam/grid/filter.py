@@ -16,11 +16,14 @@ accumulated in between (``u``). For each particle, at its previous pose ``x'``:
 When the refinement ends with too few end points near occupied cells (the laser odometry
 can be wrong by decimetres and tenths of a radian where a scan alone is ambiguous), an exhaustive
 correlative search over a wide window around ``x^`` (``mazeslam.filters.correlative``, against the
-particle's occupied cells) seeds the refinement again. When the match still fails the stencil is
-centred on ``x^`` for the weight and the pose is drawn from the motion model. Then the scan is ray-traced into
-the particle's map at its new pose. Weights are tempered as gmapping does (log weights divided by
-``observation_gain`` times the particle count) and the particles are resampled (systematic) only
-when the effective sample size falls below ``resample_threshold`` times their count.
+particle's occupied cells) seeds the refinement again. On a log without odometry the search runs
+at every scan, over a wider turn (``search``): the scan matcher alone then moves the robot, and a
+match that lies on walls can still be a metre or a right angle wrong. When the match still fails
+the stencil is centred on ``x^`` for the weight and the pose is drawn from the motion model. Then
+the scan is ray-traced into the particle's map at its new pose. Weights are tempered as gmapping
+does (log weights divided by ``observation_gain`` times the particle count) and the particles are
+resampled (systematic) only when the effective sample size falls below ``resample_threshold``
+times their count.
 
 The motion ``u`` between scans comes from the project's laser odometry (``laser_odometry``, scan to
 scan ICP with the wheel odometry as prior), or from the log's odometry records alone.
@@ -69,6 +72,14 @@ class GridSlamParams:
         rescue: the correlative search run when a refinement fails; rescue_sigma (m, rad) its
             window's standard deviation in position and heading (it reaches ``rescue.window_sigmas``
             of them) and the refinements' prior from its candidates.
+        search: when every particle runs that search: "failed-match" (only when its refinement
+            fails), "every-scan" (at every scan, from the prediction and the search's candidates,
+            the best by likelihood times the prior of ``every_scan_sigma``), or "without-odometry"
+            (every scan on a log with no odometry records, else failed-match).
+        every_scan_sigma: the window's standard deviation (m, rad) at every scan: 2.5 of them reach
+            1 m and 1.75 rad. Without odometry nothing bounds the scan matcher's turn (orebro's
+            laser odometry turns 1.5 rad the wrong way between its scans 212 and 213), and the
+            window must hold the turn back.
         map_corrected_motion: before the particles move, the motion is corrected by matching the
             scan against the best particle's map (once per scan; rescue_below and rescue_gain:
             see ``GridSlam._map_corrected_motion``).
@@ -92,6 +103,8 @@ class GridSlamParams:
         default_factory=lambda: CorrelativeParams(resolution=0.1, sigma=0.1, turn_step=2.0, candidates=3, max_points=90)
     )
     rescue_sigma: tuple = (0.4, 0.3)
+    search: str = "without-odometry"
+    every_scan_sigma: tuple = (0.4, 0.7)
     map_corrected_motion: bool = False
     rescue_below: float = 0.8
     rescue_gain: float = 0.15
@@ -101,8 +114,13 @@ class GridSlamParams:
     def __post_init__(self):
         object.__setattr__(self, "kernel_step", tuple(self.kernel_step))
         object.__setattr__(self, "rescue_sigma", tuple(self.rescue_sigma))
+        object.__setattr__(self, "every_scan_sigma", tuple(self.every_scan_sigma))
         require(self.particles >= 1, "particles must be at least 1")
         require(self.motion in ("laser", "wheels"), f'motion must be "laser" or "wheels", got {self.motion!r}')
+        require(self.search in SEARCHES, f"search must be one of {', '.join(map(repr, SEARCHES))}, got {self.search!r}")
+        for name in ("rescue_sigma", "every_scan_sigma"):
+            value = getattr(self, name)
+            require(len(value) == 2 and all(v > 0 for v in value), f"{name}: 2 positive values (m, rad), got {value}")
         require(self.linear_update >= 0 and self.angular_update >= 0, "update thresholds must be >= 0")
         require(len(self.kernel_step) == 3 and all(s > 0 for s in self.kernel_step), "kernel_step: 3 positive steps")
         require(0 <= self.resample_threshold <= 1, "resample_threshold must be a fraction")
@@ -113,12 +131,30 @@ class GridSlamParams:
     @property
     def rescue_covariance(self) -> np.ndarray:
         """Covariance (3, 3) of the rescue search's window (see ``rescue_sigma``)."""
-        xy, theta = self.rescue_sigma
-        return np.diag([xy**2, xy**2, theta**2])
+        return _window_covariance(self.rescue_sigma)
+
+    @property
+    def every_scan_covariance(self) -> np.ndarray:
+        """Covariance (3, 3) of the search's window when it runs at every scan (``every_scan_sigma``)."""
+        return _window_covariance(self.every_scan_sigma)
+
+    def searches_every_scan(self, course_log: CourseLog) -> bool:
+        """Whether the particles search their maps at every scan of ``course_log`` (``search``)."""
+        return self.search == "every-scan" or (self.search == "without-odometry" and not course_log.is_odometry.any())
 
     def motion_covariance(self, motion: np.ndarray) -> np.ndarray:
         """Covariance (3, 3) of a motion ``(dx, dy, dtheta)`` between processed scans."""
         return self.motion_noise.relative_covariance(motion) + self.motion_floor**2 * np.eye(3)
+
+
+#: When the particles run the wide search (``GridSlamParams.search``).
+SEARCHES = ("failed-match", "every-scan", "without-odometry")
+
+
+def _window_covariance(sigma: tuple) -> np.ndarray:
+    """Diagonal covariance (3, 3) of a search window with standard deviations ``(m, rad)``."""
+    xy, theta = sigma
+    return np.diag([xy**2, xy**2, theta**2])
 
 
 #: The stencil of the proposal: every combination of -1, 0, +1 steps in x, y and theta, (27, 3).
@@ -139,10 +175,11 @@ class ScanSensor:
 
 class GridSlam:
     """The particle cloud: poses (P, 3) world frame, log weights (P,), maps (P ``TiledGrid``) and
-    each path's summed log likelihood (P,) (``best_particle``)."""
+    each path's summed log likelihood (P,) (``best_particle``). ``search_every_scan``: every
+    particle runs the wide search at every scan (``GridSlamParams.searches_every_scan``)."""
 
-    def __init__(self, params: GridSlamParams, start_pose, sensor: ScanSensor):
-        self.params, self.sensor = params, sensor
+    def __init__(self, params: GridSlamParams, start_pose, sensor: ScanSensor, search_every_scan: bool = False):
+        self.params, self.sensor, self.search_every_scan = params, sensor, search_every_scan
         count = params.particles
         self.poses = np.tile(np.asarray(start_pose, dtype=float), (count, 1))
         self.log_weights = np.zeros(count)
@@ -203,9 +240,12 @@ class GridSlam:
         """The improved proposal of one particle: the drawn pose (3,), ``log eta`` and whether the
         match was accepted (if not, the pose is the stencil's centre and the caller draws one)."""
         match = self.params.match
-        mode = refine_pose(field, points, predicted, information, match)
-        if field.overlap(mode, points, match) < match.min_overlap:
-            mode = self._rescue(field, points, predicted)
+        if self.search_every_scan:
+            mode = self._rescue(field, points, predicted, self.params.every_scan_covariance)
+        else:
+            mode = refine_pose(field, points, predicted, information, match)
+            if field.overlap(mode, points, match) < match.min_overlap:
+                mode = self._rescue(field, points, predicted, self.params.rescue_covariance)
         accepted = field.overlap(mode, points, match) >= match.min_overlap
         centre = mode if accepted else predicted
         stencil = centre + STENCIL * self.params.kernel_step
@@ -221,10 +261,12 @@ class GridSlam:
         pose[2] = wrap_angle(pose[2])
         return pose, log_eta, True
 
-    def _rescue(self, field: LikelihoodField, points: np.ndarray, predicted: np.ndarray) -> np.ndarray:
+    def _rescue(
+        self, field: LikelihoodField, points: np.ndarray, predicted: np.ndarray, covariance: np.ndarray
+    ) -> np.ndarray:
         """The best pose (3,) of the refinements seeded by ``predicted`` (3,) and by a correlative
-        search around it over the particle's occupied cells, by likelihood times the rescue prior."""
-        covariance = self.params.rescue_covariance
+        search around it over the particle's occupied cells, by likelihood times the prior
+        ``N(predicted, covariance)`` (3, 3) that also sets the search's window."""
         grid = LikelihoodGrid(field.occupied_points(), self.params.rescue)
         seeds = np.vstack([predicted, correlative_candidates(grid, points, predicted, covariance, self.params.rescue)])
         information = np.linalg.inv(covariance)
@@ -253,7 +295,7 @@ class GridSlam:
         local_overlap = field.overlap(local, points, match)
         if local_overlap >= self.params.rescue_below:
             return motion
-        pose = self._rescue(field, points, predicted)
+        pose = self._rescue(field, points, predicted, self.params.rescue_covariance)
         if field.overlap(pose, points, match) < max(match.min_overlap, local_overlap + self.params.rescue_gain):
             return motion
         return relative(self.poses[best], pose)
@@ -401,7 +443,9 @@ def run_grid_slam(
     motion_seconds = time.perf_counter() - began
     records = np.flatnonzero(course_log.is_scan)
     count, particles = len(records), params.particles
-    slam = GridSlam(params, start_pose, ScanSensor.of(geometry, course_log.width))
+    slam = GridSlam(
+        params, start_pose, ScanSensor.of(geometry, course_log.width), params.searches_every_scan(course_log)
+    )
     node_poses, node_parents = np.empty((count, particles, 3)), np.empty((count, particles), dtype=int)
     mean_poses, covariances = np.empty((count, 3)), np.empty((count, 3, 3))
     processed, resampled = np.zeros(count, bool), np.zeros(count, bool)

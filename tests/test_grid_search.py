@@ -1,0 +1,71 @@
+"""The grid filter's wide search at every scan (``GridSlamParams.search``): on a log without odometry
+the scan matcher alone moves the robot, and its motion can be a right angle wrong while the scan
+still lies on walls."""
+
+import numpy as np
+import pytest
+
+from mazeslam import log
+from mazeslam.envs.laser import VirtualLaser
+from mazeslam.geometry import wrap_angle
+from mazeslam.grid import GridSlam, GridSlamParams
+from mazeslam.grid.filter import ScanSensor
+from mazeslam.grid.synthetic import LASER, building_walls
+
+BEARINGS = LASER.geometry.bearings(LASER.beams)
+#: The robot drives along the ring's lower corridor (2 m wide, its centre line at y = 1), facing +x.
+PATH = np.array([[x, 1.0, 0.0] for x in (1.0, 1.5, 2.0, 2.5, 3.0, 3.5)])
+#: The motion the filter is told for the last step: the 0.5 m forward, and a turn of 1.5 rad that
+#: never happened (as orebro's laser odometry between its scans 212 and 213): twice the failed-match
+#: rescue's +-0.75 rad window, within every scan's +-1.75 rad.
+WRONG_MOTION = np.array([0.5, 0.0, 1.5])
+
+
+def poses_after_a_wrong_turn(search: str) -> np.ndarray:
+    """Every particle's pose (P, 3) after the scans of ``PATH``, mapped with the true motions but
+    the last, which is ``WRONG_MOTION``."""
+    laser, rng = VirtualLaser(LASER, building_walls()), np.random.default_rng(3)
+    params = GridSlamParams(particles=4, search=search)
+    sensor = ScanSensor(BEARINGS, np.zeros(2))
+    slam = GridSlam(params, PATH[0], sensor, search_every_scan=search == "every-scan")
+    motions = [np.zeros(3)] + [np.array([0.5, 0.0, 0.0])] * (len(PATH) - 2) + [WRONG_MOTION]
+    for pose, motion in zip(PATH, motions):
+        slam.process(laser.scan(pose, rng), motion)
+    return slam.poses
+
+
+def test_searching_at_every_scan_undoes_a_wrong_turn_of_the_motion():
+    poses = poses_after_a_wrong_turn("every-scan")
+    assert np.all(np.hypot(*(poses[:, :2] - PATH[-1, :2]).T) < 0.1)
+    assert np.all(np.abs(wrap_angle(poses[:, 2] - PATH[-1, 2])) < 0.02)
+
+
+def test_searching_only_on_a_failed_match_keeps_that_turn():
+    poses = poses_after_a_wrong_turn("failed-match")
+    assert np.all(np.abs(wrap_angle(poses[:, 2] - PATH[-1, 2])) > 0.5)
+
+
+def _log(with_odometry: bool) -> log.CourseLog:
+    scan = " ".join(["1.0"] * 4)
+    lines = ["0.0 1 " + scan, "0.5 0 0.1 0.0 -1 -1" if with_odometry else "0.5 1 " + scan, "1.0 1 " + scan]
+    return log.parse("\n".join(lines) + "\n")
+
+
+@pytest.mark.parametrize(
+    ("search", "with_odometry", "every_scan"),
+    [
+        ("without-odometry", False, True),
+        ("without-odometry", True, False),
+        ("every-scan", True, True),
+        ("failed-match", False, False),
+    ],
+)
+def test_when_the_particles_search_at_every_scan(search, with_odometry, every_scan):
+    assert GridSlamParams(search=search).searches_every_scan(_log(with_odometry)) is every_scan
+
+
+def test_bad_search_settings_are_named():
+    with pytest.raises(ValueError, match="search must be one of 'failed-match', 'every-scan', 'without-odometry'"):
+        GridSlamParams(search="always")
+    with pytest.raises(ValueError, match=r"every_scan_sigma: 2 positive values \(m, rad\)"):
+        GridSlamParams(every_scan_sigma=(0.4, 0.0))
