@@ -70,6 +70,14 @@ def explicit_distance2(slam: FastSLAM, observations, noise, with_pose_uncertaint
     return np.einsum("pkmi,pkmi->pkm", nu, np.linalg.solve(s, nu[..., None])[..., 0])
 
 
+def spread(model, slots: int) -> np.ndarray:
+    """(P, K, ``slots``) the model's squared distances over the first slots (inf where not modelled)."""
+    p, k, _ = model.distance2.shape
+    whole = np.full((p, k, slots), np.inf)
+    whole[:, :, model.candidates.slots] = model.distance2
+    return whole
+
+
 @pytest.mark.parametrize("version", [1, 2])
 @pytest.mark.parametrize("mixed", [False, True])
 def test_landmarks_left_out_of_the_model_could_not_have_mattered(version, mixed):
@@ -95,20 +103,19 @@ def test_landmarks_left_out_of_the_model_could_not_have_mattered(version, mixed)
     truth = explicit_distance2(slam, observations, noise, version == 2)[:, :, :60]
     culled = slam._candidates(observations, noise, 60)
     model = slam._model(observations, noise, culled, version == 2)
-    modelled = np.zeros((p, 6, 60), dtype=bool)  # particle-observation-slot triples computed
-    modelled[:, :, culled.slots] = np.isfinite(model.distance2)
+    modelled = np.isfinite(spread(model, 60))  # particle-observation-slot triples computed
     held = slam.exists[:, None, :60]
     near = np.zeros((6, 60), dtype=bool)
     near[:, culled.slots] = culled.near
     assert (~near).mean() > 0.6  # the index culls pairs
     assert (held & near & ~modelled).sum() > 0.1 * (held & near).sum()  # and particles within the pairs
     assert truth[held & ~modelled].min() >= params.new_landmark_gate
-    np.testing.assert_allclose(model.distance2[modelled[:, :, culled.slots]], truth[modelled], rtol=1e-9)
+    np.testing.assert_allclose(spread(model, 60)[modelled], truth[modelled], rtol=1e-9)
     # Without the cull within the pairs (no points), the same pairs hold the same values where both compute.
     whole_pairs = Candidates(culled.slots, culled.valid, culled.near)
-    unculled = slam._model(observations, noise, whole_pairs, version == 2).distance2
-    assert np.array_equal(unculled[np.isfinite(model.distance2)], model.distance2[np.isfinite(model.distance2)])
-    assert unculled[np.isinf(model.distance2)].min() >= params.new_landmark_gate
+    unculled = spread(slam._model(observations, noise, whole_pairs, version == 2), 60)
+    assert np.array_equal(unculled[modelled], spread(model, 60)[modelled])
+    assert unculled[~modelled].min() >= params.new_landmark_gate
 
 
 def two_particles_one_slot(second_landmark_x: float, association: str = "unknown") -> FastSLAM:

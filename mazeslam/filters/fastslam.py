@@ -253,7 +253,8 @@ class MeasurementModel:
     one scan's K observations.
 
     Attributes:
-        candidates: the landmark slots modelled, C of them.
+        candidates: the landmark slots modelled, C of them: those of ``FastSLAM._candidates``
+            with a triple computed (without ``points``, ``reach2`` and ``forced``).
         distance2: (P, K, C) squared Mahalanobis distance of the innovation under
             S = H Sigma H^T + R (+ Gx Sigma_x Gx^T with the pose's uncertainty), computed for the
             particle-observation-slot triples ``FastSLAM._modelled`` keeps only: elsewhere inf
@@ -524,6 +525,11 @@ class FastSLAM:
         det = t00 * t11 - t01 * t01
         nu0 = observations[ks, 0] - rho
         nu1 = ekf.wrap(observations[ks, 1] - (np.arctan2(dy, dx) - poses[2]))  # the predicted bearing unwrapped
+        # The model keeps the candidate columns with a triple left only (the others would be inf).
+        present = np.zeros(len(candidates.slots), dtype=bool)
+        present[columns] = True
+        columns = (np.cumsum(present) - 1)[columns]
+        candidates = Candidates(candidates.slots[present], candidates.valid[:, present], candidates.near[:, present])
         shape = (len(self.poses), len(observations), len(candidates.slots))
         triples = (rows * shape[1] + ks) * shape[2] + columns
         distance2 = np.full(shape, np.inf)
