@@ -160,6 +160,7 @@ def test_a_particle_whose_landmark_is_beyond_reach_is_left_out_of_its_pair(secon
     # The update decides as it would with the distance: particle 1 matches only at 2 cm, else starts a landmark.
     report = slam.update(observation)
     assert (report.matched, report.new) == ((2, 0) if second_landmark_x == 1.02 else (1, 1))
+    assert (report.pairs, report.within_reach, report.modelled) == (1, len(rows), len(rows))  # no facings: no gate
 
 
 def test_known_association_models_its_slot_beyond_reach():
@@ -337,3 +338,19 @@ def test_fastslam2_carries_the_spread_fastslam1_draws_for_laser_odometry():
         carried.predict_relative(step)
     assert carried.poses[0] == pytest.approx(drawn.poses.mean(axis=0), abs=0.01)
     assert carried.pose_covariances[0] == pytest.approx(np.cov(drawn.poses.T), abs=2e-4, rel=0.1)
+
+
+def test_the_report_counts_the_model_the_facing_gate_leaves():
+    """One particle, two landmarks at one spot 1 m ahead facing opposite ways (a wall end): the
+    observation there, facing back at the robot, is near both slots and within reach of both, and
+    the facing gate leaves the model one of them, which it matches."""
+    slam = FastSLAM(dataclasses.replace(EXACT, sigmaR=0.005, sigmaB=0.005))
+    slam.exists[0, :2] = True
+    slam.means[0, :2] = [1.0, 0.0]
+    slam.covariances[0, :2] = 0.005**2 * np.eye(2)
+    slam.facings[0, :2] = [0.0, math.pi]
+    slam.seen[0, :2] = 5
+    slam.reindex()
+    report = slam.update(np.array([[1.0, 0.0]]), facings=np.array([math.pi]))
+    assert (report.pairs, report.within_reach, report.modelled, report.matched) == (2, 2, 1, 1)
+    assert slam.seen[0, :2].tolist() == [5, 6]

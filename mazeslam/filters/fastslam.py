@@ -207,6 +207,12 @@ class UpdateReport:
     use, averaged over the particles that associated it with their weights before the scan."""
     nis_observations: np.ndarray = field(default_factory=lambda: np.empty(0, dtype=np.int64))
     """(A,) the index in the scan's observations of each ``nis`` value."""
+    pairs: int = 0
+    """Observation-slot pairs the spatial index kept (``Candidates.near``)."""
+    within_reach: int = 0
+    """Their particle-observation-slot triples within reach (``FastSLAM._modelled``)."""
+    modelled: int = 0
+    """The triples the measurement model computed (those the facing gate left)."""
 
 
 @dataclass
@@ -262,12 +268,16 @@ class MeasurementModel:
             particle, and pairs the facing gate rules out).
         triples: (E,) the flat indexes into ``distance2`` of the triples computed.
         triple_det: (E,) the determinant of S of each (``det`` spreads it over (P, K, C)).
+        pairs: how many observation-slot pairs the index kept; within_reach: how many triples
+            ``FastSLAM._modelled`` kept of them (before the facing gate).
     """
 
     candidates: Candidates
     distance2: np.ndarray
     triples: np.ndarray
     triple_det: np.ndarray
+    pairs: int = 0
+    within_reach: int = 0
 
     @property
     def det(self) -> np.ndarray:
@@ -494,7 +504,9 @@ class FastSLAM:
         Computed for the triples ``_modelled`` keeps only, each one entry of flat (E,) arrays (the
         2x2 matrices written entry by entry; the landmarks gathered by flat index), so that the
         cost follows the landmarks near each particle's observations, not the candidate slots."""
+        pairs = int(candidates.near.sum())
         rows, ks, columns = self._modelled(candidates)
+        within_reach = len(rows)
         at = rows * self.means.shape[1] + candidates.slots[columns]  # flat (particle, slot) indexes
         poses = np.take(self.poses.T, rows, axis=1)  # (3, E)
         if (
@@ -534,7 +546,7 @@ class FastSLAM:
         triples = (rows * shape[1] + ks) * shape[2] + columns
         distance2 = np.full(shape, np.inf)
         distance2.reshape(-1)[triples] = (t11 * nu0 * nu0 - 2 * t01 * nu0 * nu1 + t00 * nu1 * nu1) / det
-        return MeasurementModel(candidates, distance2, triples, det)
+        return MeasurementModel(candidates, distance2, triples, det, pairs, within_reach)
 
     # -- update -------------------------------------------------------------------------------
     def update(
@@ -580,6 +592,7 @@ class FastSLAM:
             self.proposal.carries_pose_uncertainty,
             relative_facings if gated else None,
         )
+        report.pairs, report.within_reach, report.modelled = model.pairs, model.within_reach, len(model.triples)
         if assigned is None:
             assigned = model.candidates.slots_of(associate_greedy(model.distance2, self.params.gate))
         # 2. The proposal's draw; the landmarks are then corrected at the drawn poses.
