@@ -36,7 +36,8 @@ def poses_after_a_wrong_turn(search: str) -> np.ndarray:
 
 def test_searching_at_every_scan_undoes_a_wrong_turn_of_the_motion():
     poses = poses_after_a_wrong_turn("every-scan")
-    assert np.all(np.hypot(*(poses[:, :2] - PATH[-1, :2]).T) < 0.1)
+    # Along the corridor only its pillars place a scan: a particle may end up to a decimetre ahead.
+    assert np.all(np.hypot(*(poses[:, :2] - PATH[-1, :2]).T) < 0.15)
     assert np.all(np.abs(wrap_angle(poses[:, 2] - PATH[-1, 2])) < 0.02)
 
 

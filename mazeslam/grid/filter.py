@@ -210,6 +210,7 @@ class GridSlam:
             motion = self._map_corrected_motion(motion, points)
         covariance = self.params.motion_covariance(motion)
         information = np.linalg.inv(covariance)
+        offsets = self._searched_offsets(points, motion) if self.search_every_scan else None
         log_etas, matched = np.zeros(len(self.poses)), 0
         for index, grid in enumerate(self.maps):
             predicted = compose(self.poses[index], motion)
@@ -220,7 +221,7 @@ class GridSlam:
                     window.crop(transform_points(predicted, points), self.params.window_margin), self.params.match
                 )
                 if field.has_occupied:
-                    pose, log_etas[index], accepted = self._propose(field, points, predicted, information)
+                    pose, log_etas[index], accepted = self._propose(field, points, predicted, information, offsets)
                     if not accepted:
                         pose = predict_relative(self.poses[index][None], motion, covariance, self.rng)[0]
                     matched += accepted
@@ -235,13 +236,21 @@ class GridSlam:
         return matched / len(self.poses), effective_sample_size(self.weights), self._resample_if_needed()
 
     def _propose(
-        self, field: LikelihoodField, points: np.ndarray, predicted: np.ndarray, information: np.ndarray
+        self,
+        field: LikelihoodField,
+        points: np.ndarray,
+        predicted: np.ndarray,
+        information: np.ndarray,
+        offsets: np.ndarray | None = None,
     ) -> tuple[np.ndarray, float, bool]:
         """The improved proposal of one particle: the drawn pose (3,), ``log eta`` and whether the
-        match was accepted (if not, the pose is the stencil's centre and the caller draws one)."""
+        match was accepted (if not, the pose is the stencil's centre and the caller draws one).
+        ``offsets`` (C, 3): the scan's searched poses relative to the prediction
+        (``_searched_offsets``), when the particles search at every scan."""
         match = self.params.match
-        if self.search_every_scan:
-            mode = self._rescue(field, points, predicted, self.params.every_scan_covariance)
+        if offsets is not None:
+            seeds = np.vstack([predicted, compose(predicted, offsets).reshape(-1, 3)])
+            mode = self._best_refinement(field, points, predicted, self.params.every_scan_covariance, seeds)
         else:
             mode = refine_pose(field, points, predicted, information, match)
             if field.overlap(mode, points, match) < match.min_overlap:
@@ -269,11 +278,38 @@ class GridSlam:
         ``N(predicted, covariance)`` (3, 3) that also sets the search's window."""
         grid = LikelihoodGrid(field.occupied_points(), self.params.rescue)
         seeds = np.vstack([predicted, correlative_candidates(grid, points, predicted, covariance, self.params.rescue)])
+        return self._best_refinement(field, points, predicted, covariance, seeds)
+
+    def _best_refinement(
+        self, field: LikelihoodField, points: np.ndarray, predicted: np.ndarray, covariance: np.ndarray, seeds
+    ) -> np.ndarray:
+        """The best pose (3,) of the refinements from ``seeds`` (C, 3), by likelihood times the
+        prior ``N(predicted, covariance)``."""
         information = np.linalg.inv(covariance)
         refined = np.array(
             [refine_pose(field, points, predicted, information, self.params.match, seed) for seed in seeds]
         )
         return refined[np.argmax(field.objective(refined, points, predicted, information, self.params.match))]
+
+    def _searched_offsets(self, points: np.ndarray, motion: np.ndarray) -> np.ndarray:
+        """The search at every scan, run once: the correlative search's candidates (C, 3) for the
+        scan's ``points`` over the best particle's map, around its pose moved by ``motion`` (window
+        ``every_scan_sigma``), as poses relative to that prediction. Every particle refines from
+        them, moved onto its own prediction, against its own map: the particles' maps share most
+        tiles, and the search costs 30 refinements' time."""
+        best = self.best_particle()
+        grid, predicted = self.maps[best], compose(self.poses[best], motion)
+        if not grid.tiles or len(points) < 3:
+            return np.zeros((0, 3))
+        world = transform_points(predicted, points)
+        field = LikelihoodField(grid.window(*grid.tile_range(world, self.params.window_margin)), self.params.match)
+        if not field.has_occupied:
+            return np.zeros((0, 3))
+        covariance, search = self.params.every_scan_covariance, self.params.rescue
+        candidates = correlative_candidates(
+            LikelihoodGrid(field.occupied_points(), search), points, predicted, covariance, search
+        )
+        return relative(predicted, candidates).reshape(-1, 3)
 
     def _map_corrected_motion(self, motion: np.ndarray, points: np.ndarray) -> np.ndarray:
         """``motion`` (3,) corrected by matching the scan's ``points`` against the best particle's
