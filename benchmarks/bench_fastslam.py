@@ -15,12 +15,21 @@ second, or per second of this process's CPU time with ``--cpu-time`` (or
 ``MAZESLAM_BENCH_CLOCK=cpu``): on a machine shared with other work the wall clock also counts the
 time others hold the cores.
 Run: ``python benchmarks/bench_fastslam.py``.
+
+``--against COMMIT [--turns N]`` instead compares this tree's filter with the code at ``COMMIT``
+(its package from ``git archive``), in turns, each in a fresh interpreter: the loop-oracle row's
+vectorised seconds and the map-size row's two runs, on logs simulated once.
 """
 
 from __future__ import annotations
 
 import dataclasses
+import io
+import json
+import os
+import subprocess
 import sys
+import tarfile
 import tempfile
 from collections.abc import Iterator
 from pathlib import Path
@@ -28,7 +37,7 @@ from pathlib import Path
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
-from bench_env import clock, clock_name  # noqa: E402  (one clock for the benchmarks that offer CPU time)
+from bench_env import clock, clock_name, uses_cpu_time  # noqa: E402  (one clock for the benchmarks that offer CPU time)
 from reference_fastslam import LoopFastSLAM  # noqa: E402
 
 from mazeslam import log, simulate  # noqa: E402
@@ -44,6 +53,7 @@ TARGET_SPEEDUP = 100.0
 TARGET_MAP_RATIO = 1.5
 TARGET_REAL_TIME = 20.0
 TARGET_REAL_TIME_MANY = 1.0
+REPO = Path(__file__).resolve().parents[1]
 
 
 def _steps(run: LoadedRun, scans: int) -> list[tuple[str, tuple]]:
@@ -70,9 +80,10 @@ def _time_steps(filter_class, steps, start) -> float:
     return clock() - began
 
 
-def _time_filter(run: LoadedRun, particles: int, records: int | None = None) -> dict:
+def _time_filter(run: LoadedRun, particles: int, records: int | None = None, counts: bool = True) -> dict:
     """The filter over the first ``records`` records of ``run`` (all by default): seconds, robot
-    seconds, observations and the time per particle and observation (microseconds)."""
+    seconds, observations and the time per particle and observation (microseconds); with
+    ``counts``, the measurement model's size per scan (``UpdateReport.pairs`` ...)."""
     course_log = run.log
     if records is not None:
         course_log = log.CourseLog(course_log.times[:records], course_log.flags[:records], course_log.values[:records])
@@ -89,7 +100,9 @@ def _time_filter(run: LoadedRun, particles: int, records: int | None = None) -> 
         "model_per_scan": [
             sum(getattr(report, name) for report in reports) / len(reports)
             for name in ("observations", "pairs", "within_reach", "modelled")
-        ],
+        ]
+        if counts
+        else [],
     }
 
 
@@ -113,14 +126,24 @@ def oracle_speedup(run: LoadedRun) -> dict:
     }
 
 
+def _simulate_small(folder: Path) -> LoadedRun:
+    """The default 4x4 run (seed 0), simulated into ``folder``/small."""
+    return load_run(simulate(folder / "small" / "run.log", seed=0, progress=False).log_path)
+
+
+def _simulate_big(folder: Path) -> LoadedRun:
+    """The 16x16 tour (seed 3), simulated into ``folder``/big."""
+    default = SimulationConfig()
+    config = dataclasses.replace(default, maze=dataclasses.replace(default.maze, rows=16, cols=16))
+    return load_run(simulate(folder / "big" / "run.log", config, seed=3, progress=False).log_path)
+
+
 def run(full: bool = False) -> Iterator[dict]:
     """The rows, each yielded as soon as it is measured (the slow ones last)."""
     with tempfile.TemporaryDirectory() as folder:
-        small = load_run(simulate(Path(folder) / "small" / "run.log", seed=0, progress=False).log_path)
+        small = _simulate_small(Path(folder))
         yield oracle_speedup(small)
-        default = SimulationConfig()
-        config = dataclasses.replace(default, maze=dataclasses.replace(default.maze, rows=16, cols=16))
-        big = load_run(simulate(Path(folder) / "big" / "run.log", config, seed=3, progress=False).log_path)
+        big = _simulate_big(Path(folder))
         small_cost = _time_filter(small, PARTICLES)
         big_cost = _time_filter(big, PARTICLES)
         ratio = big_cost["per_particle_observation_us"] / small_cost["per_particle_observation_us"]
@@ -156,9 +179,62 @@ def _real_time_row(name: str, cost: dict, target: float) -> dict:
     }
 
 
+def measure(folder: Path) -> dict:
+    """In this interpreter, whichever ``mazeslam`` it imports: the loop-oracle row's vectorised
+    seconds (best of 3) and both runs' filter seconds, on the logs in ``folder``."""
+    import mazeslam
+
+    small, big = (load_run(folder / name / "run.log") for name in ("small", "big"))
+    steps = _steps(small, scans=40)
+    oracle_rows = min(_time_steps(FastSLAM, steps, small.start_pose) for _ in range(3))
+    small_cost, big_cost = (_time_filter(run, PARTICLES, counts=False) for run in (small, big))
+    return {
+        "package": str(Path(mazeslam.__file__).parent),
+        "oracle_rows_s": oracle_rows,
+        "default_run_s": small_cost["seconds"],
+        "tour_s": big_cost["seconds"],
+        "ratio": big_cost["per_particle_observation_us"] / small_cost["per_particle_observation_us"],
+    }
+
+
+def against(commit: str, turns: int) -> Iterator[dict]:
+    """``measure`` for the code at ``commit`` and for this tree, in turns, each in a fresh
+    interpreter that imports its own package (the commit's put first on the path), on logs this
+    tree simulates once."""
+    with tempfile.TemporaryDirectory() as folder:
+        root = Path(folder)
+        _simulate_small(root)
+        _simulate_big(root)
+        archive = subprocess.run(
+            ["git", "-C", str(REPO), "archive", commit, "mazeslam"], check=True, capture_output=True
+        )
+        tarfile.open(fileobj=io.BytesIO(archive.stdout)).extractall(root / "package", filter="data")
+        for turn in range(turns):
+            for name, path in ((commit, str(root / "package")), ("this tree", None)):
+                environment = {key: value for key, value in os.environ.items() if key != "PYTHONPATH"}
+                environment.update({"PYTHONPATH": path} if path else {})
+                environment.update({"MAZESLAM_BENCH_CLOCK": "cpu"} if uses_cpu_time() else {})
+                load = os.getloadavg()[0]
+                command = [sys.executable, __file__, "--measure", str(root)]
+                printed = subprocess.run(command, check=True, capture_output=True, text=True, env=environment, cwd=root)
+                row = json.loads(printed.stdout.splitlines()[-1])
+                assert row.pop("package").startswith(path or str(REPO)), "the interpreter imported the wrong package"
+                yield {"benchmark": f"{name}, turn {turn + 1}", **row, "load_average": f"{load:.1f}"}
+
+
 if __name__ == "__main__":
+    if sys.argv[1:2] == ["--measure"]:
+        print(json.dumps(measure(Path(sys.argv[2]))))
+        raise SystemExit(0)
     import pandas as pd
 
+    if "--against" in sys.argv:
+        turns = int(sys.argv[sys.argv.index("--turns") + 1]) if "--turns" in sys.argv else 2
+        rows = against(sys.argv[sys.argv.index("--against") + 1], turns)
+        for row in rows:
+            print(pd.DataFrame([row]).set_index("benchmark").to_markdown(floatfmt=".3g"), end="\n\n", flush=True)
+        print("seconds of the", clock_name())
+        raise SystemExit(0)
     for row in run(full="--full" in sys.argv):
         print(pd.DataFrame([row]).set_index("benchmark").to_markdown(floatfmt=".3g"), end="\n\n", flush=True)
     print("seconds of the", clock_name())
