@@ -9,7 +9,10 @@
    twice) whatever else the machine is running: 1.0 is none. ``--repeats N`` alternates the two N times.
 2. The whole grid (270 runs) on this machine's cores (target: under 15 minutes; ``--subset`` skips it,
    ``--grid`` runs only it).
-Run: ``python benchmarks/bench_sweep.py [--subset | --grid] [--repeats N]``.
+``--tasks`` instead times each task of the subset in this process (CPU time; the simulations, the
+batch optima, the filter runs, in the sweep's order) and the makespan of two workers taking them in
+that order phase by phase: the speed-up the schedule allows on two free cores, whatever the load.
+Run: ``python benchmarks/bench_sweep.py [--subset | --grid | --tasks] [--repeats N]``.
 """
 
 from __future__ import annotations
@@ -51,6 +54,45 @@ def measure(workers: int, out_dir: Path) -> dict:
     cpu, began = _cpu_seconds(), time.perf_counter()
     run_sweep(subset, out_dir, workers=workers, progress=False)
     return {"wall": time.perf_counter() - began, "cpu": _cpu_seconds() - cpu, "runs": len(subset.runs())}
+
+
+def schedule_bound(workers: int = 2) -> Iterator[dict]:
+    """Each task of the subset, in ``run_sweep``'s order and phases, timed in this process (CPU
+    seconds), and the makespan of ``workers`` workers each taking the next task when free (the
+    pool's order): one row per phase, then the whole sweep's tasks over that makespan."""
+    import scipy.optimize  # noqa: F401  (loaded before the tasks, as the sweep's process does before forking)
+
+    from mazeslam.evaluation import sweep as sweeps
+
+    subset = _subset(load_sweep(GRID), SUBSET_RUNS)
+    runs = sorted(subset.runs(), key=lambda run: -sweeps.configure(subset, run["settings"])[1].fastslam.NPARTICLES)
+    total = makespan = 0.0
+    with tempfile.TemporaryDirectory() as logs, tempfile.TemporaryDirectory() as maps:
+        phases = (
+            ("simulations", sweeps.simulate_run, {sweeps.simulation_key(subset, r): r for r in runs}.values(), (logs,)),
+            ("batch optima", sweeps.optimum_run, {sweeps.optimum_key(subset, r): r for r in runs}.values(), (logs,)),
+            ("filter runs", sweeps.execute_run, runs, (maps, logs)),
+        )
+        for name, function, calls, extra in phases:
+            seconds, free = [], [0.0] * workers
+            for run in calls:
+                began = time.process_time()
+                function(subset, run, *extra)
+                seconds.append(time.process_time() - began)
+                free[free.index(min(free))] += seconds[-1]
+            total, makespan = total + sum(seconds), makespan + max(free)
+            yield {
+                "benchmark": f"{name}: {len(seconds)} tasks of {min(seconds):.2f}-{max(seconds):.2f} s",
+                "seconds": max(free),
+                "baseline_s": sum(seconds),
+                "ratio": sum(seconds) / max(free),
+            }
+    yield {
+        "benchmark": f"{SUBSET_RUNS} runs: tasks' CPU time over the {workers}-worker makespan (speed-up bound)",
+        "seconds": makespan,
+        "baseline_s": total,
+        "ratio": total / makespan,
+    }
 
 
 def _measure_fresh(workers: int, out_dir: Path) -> dict:
@@ -117,5 +159,10 @@ if __name__ == "__main__":
     import pandas as pd
 
     repeats = int(sys.argv[sys.argv.index("--repeats") + 1]) if "--repeats" in sys.argv else 1
-    for row in run(subset_only="--subset" in sys.argv, repeats=repeats, grid_only="--grid" in sys.argv):
+    rows = (
+        schedule_bound()
+        if "--tasks" in sys.argv
+        else run(subset_only="--subset" in sys.argv, repeats=repeats, grid_only="--grid" in sys.argv)
+    )
+    for row in rows:
         print(pd.DataFrame([row]).set_index("benchmark").to_markdown(floatfmt=".3g"), end="\n\n", flush=True)
