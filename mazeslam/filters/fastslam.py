@@ -362,8 +362,9 @@ class FastSLAM:
         box of that observation over the particles. A slot whose box is at least ``_reach``
         metres from every observation's box is left out: it could neither be associated nor make
         an observation ambiguous in any particle. The cost is a few operations per slot and
-        observation; the Mahalanobis work is then done on the C slots near the observations
-        (C stays flat as the map grows).
+        observation; the C slots near the observations (C stays flat as the map grows) then go to
+        ``_modelled``, which checks the same reach per particle, with the points where each
+        particle puts each observation and the squared reach of each pair.
         """
         p = len(self.poses)
         if m == 0 or not len(observations):
