@@ -45,7 +45,7 @@ from mazeslam.filters.resampling import effective_sample_size, normalized_weight
 from mazeslam.filters.scan_matching import ScanMatchParams, laser_odometry
 from mazeslam.geometry import advance_pose, compose, relative, transform_points, wrap_angle
 from mazeslam.grid.matching import LikelihoodField, MatchParams, match_points, refine_pose
-from mazeslam.grid.occupancy import GridParams, TiledGrid, distinct_tile_bytes, integrate_scan, scan_rays
+from mazeslam.grid.occupancy import GridParams, ScanRays, TiledGrid, distinct_tile_bytes, integrate_scan, scan_rays
 from mazeslam.log import CourseLog
 
 
@@ -210,18 +210,20 @@ class GridSlam:
             motion = self._map_corrected_motion(motion, points)
         covariance = self.params.motion_covariance(motion)
         information = np.linalg.inv(covariance)
-        offsets = self._searched_offsets(points, motion) if self.search_every_scan else None
+        offsets = self._searched_offsets(points, motion, rays) if self.search_every_scan else np.zeros((0, 3))
         log_etas, matched = np.zeros(len(self.poses)), 0
         for index, grid in enumerate(self.maps):
             predicted = compose(self.poses[index], motion)
-            reach = np.vstack([transform_points(predicted, rays.reach), predicted[:2]])
+            starts = np.vstack([predicted, compose(predicted, offsets).reshape(-1, 3)])  # (1 + C, 3)
+            reach = np.vstack([transform_points(start, rays.reach) for start in starts] + [starts[:, :2]])
             window = grid.window(*grid.tile_range(reach, self.params.window_margin))
             if grid.tiles and len(points) >= 3:
-                field = LikelihoodField(
-                    window.crop(transform_points(predicted, points), self.params.window_margin), self.params.match
-                )
+                seen = np.vstack([transform_points(start, points) for start in starts])
+                field = LikelihoodField(window.crop(seen, self.params.window_margin), self.params.match)
                 if field.has_occupied:
-                    pose, log_etas[index], accepted = self._propose(field, points, predicted, information, offsets)
+                    pose, log_etas[index], accepted = self._propose(
+                        field, points, predicted, information, starts if self.search_every_scan else None
+                    )
                     if not accepted:
                         pose = predict_relative(self.poses[index][None], motion, covariance, self.rng)[0]
                     matched += accepted
@@ -241,15 +243,14 @@ class GridSlam:
         points: np.ndarray,
         predicted: np.ndarray,
         information: np.ndarray,
-        offsets: np.ndarray | None = None,
+        seeds: np.ndarray | None = None,
     ) -> tuple[np.ndarray, float, bool]:
         """The improved proposal of one particle: the drawn pose (3,), ``log eta`` and whether the
         match was accepted (if not, the pose is the stencil's centre and the caller draws one).
-        ``offsets`` (C, 3): the scan's searched poses relative to the prediction
-        (``_searched_offsets``), when the particles search at every scan."""
+        ``seeds`` (C, 3): where the refinements start when the particles search at every scan (the
+        prediction and the scan's searched poses moved onto it, ``_searched_offsets``)."""
         match = self.params.match
-        if offsets is not None:
-            seeds = np.vstack([predicted, compose(predicted, offsets).reshape(-1, 3)])
+        if seeds is not None:
             mode = self._best_refinement(field, points, predicted, self.params.every_scan_covariance, seeds)
         else:
             mode = refine_pose(field, points, predicted, information, match)
@@ -291,18 +292,20 @@ class GridSlam:
         )
         return refined[np.argmax(field.objective(refined, points, predicted, information, self.params.match))]
 
-    def _searched_offsets(self, points: np.ndarray, motion: np.ndarray) -> np.ndarray:
+    def _searched_offsets(self, points: np.ndarray, motion: np.ndarray, rays: ScanRays) -> np.ndarray:
         """The search at every scan, run once: the correlative search's candidates (C, 3) for the
         scan's ``points`` over the best particle's map, around its pose moved by ``motion`` (window
         ``every_scan_sigma``), as poses relative to that prediction. Every particle refines from
         them, moved onto its own prediction, against its own map: the particles' maps share most
-        tiles, and the search costs 30 refinements' time."""
+        tiles, and the search costs 30 refinements' time. The map is read as far as the scan
+        reaches around the prediction in any direction (a turned candidate's points lie there)."""
         best = self.best_particle()
         grid, predicted = self.maps[best], compose(self.poses[best], motion)
         if not grid.tiles or len(points) < 3:
             return np.zeros((0, 3))
-        world = transform_points(predicted, points)
-        field = LikelihoodField(grid.window(*grid.tile_range(world, self.params.window_margin)), self.params.match)
+        radius = np.hypot(*rays.reach.T).max(initial=0.0)
+        disc = predicted[:2] + np.array([[-radius, -radius], [radius, radius]])
+        field = LikelihoodField(grid.window(*grid.tile_range(disc, self.params.window_margin)), self.params.match)
         if not field.has_occupied:
             return np.zeros((0, 3))
         covariance, search = self.params.every_scan_covariance, self.params.rescue
