@@ -175,8 +175,9 @@ class ScanSensor:
 
 class GridSlam:
     """The particle cloud: poses (P, 3) world frame, log weights (P,), maps (P ``TiledGrid``) and
-    each path's summed log likelihood (P,) (``best_particle``). ``search_every_scan``: every
-    particle runs the wide search at every scan (``GridSlamParams.searches_every_scan``)."""
+    each path's summed log likelihood (P,) (``best_particle``). ``search_every_scan``: the wide
+    search runs at every scan and every particle refines from its poses
+    (``GridSlamParams.searches_every_scan``)."""
 
     def __init__(self, params: GridSlamParams, start_pose, sensor: ScanSensor, search_every_scan: bool = False):
         self.params, self.sensor, self.search_every_scan = params, sensor, search_every_scan
@@ -282,7 +283,12 @@ class GridSlam:
         return self._best_refinement(field, points, predicted, covariance, seeds)
 
     def _best_refinement(
-        self, field: LikelihoodField, points: np.ndarray, predicted: np.ndarray, covariance: np.ndarray, seeds
+        self,
+        field: LikelihoodField,
+        points: np.ndarray,
+        predicted: np.ndarray,
+        covariance: np.ndarray,
+        seeds: np.ndarray,
     ) -> np.ndarray:
         """The best pose (3,) of the refinements from ``seeds`` (C, 3), by likelihood times the
         prior ``N(predicted, covariance)``."""
@@ -297,8 +303,9 @@ class GridSlam:
         scan's ``points`` over the best particle's map, around its pose moved by ``motion`` (window
         ``every_scan_sigma``), as poses relative to that prediction. Every particle refines from
         them, moved onto its own prediction, against its own map: the particles' maps share most
-        tiles, and the search costs 30 refinements' time. The map is read as far as the scan
-        reaches around the prediction in any direction (a turned candidate's points lie there)."""
+        tiles, and one search a scan costs a fifth of one per particle (orebro seed 0: 95 against
+        485 CPU s, 0.52 against 0.49 m). The map is read as far as the scan reaches around the
+        prediction in any direction (a turned candidate's points lie there)."""
         best = self.best_particle()
         grid, predicted = self.maps[best], compose(self.poses[best], motion)
         if not grid.tiles or len(points) < 3:
