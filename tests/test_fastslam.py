@@ -171,9 +171,8 @@ def test_known_association_models_its_slot_beyond_reach():
     assigned = np.zeros((2, 1), dtype=np.int64)
     model = slam._model(observation, noise, slam._candidates(observation, noise, 1, assigned), False)
     np.testing.assert_allclose(model.distance2[:, 0, 0], [0.0, 72.0], rtol=1e-9)
-    s_11 = (
-        0.005**2 / np.array([1.0, 1.06]) ** 2 + 0.005**2
-    )  # bearing variance: the landmark's over range^2 + the sensor's
+    # det S = S_00 S_11: range variance 5e-5; bearing variance the landmark's over range^2 plus the sensor's.
+    s_11 = 0.005**2 / np.array([1.0, 1.06]) ** 2 + 0.005**2
     np.testing.assert_allclose(model.det[:, 0, 0], 5e-5 * s_11, rtol=1e-9)
     assert slam.update(observation, ids=np.array([7])).matched == 2
 
