@@ -9,7 +9,10 @@ the heading error after the rigid alignment. A filter whose path is
 right but uniformly too long or too short (a laser odometry or a range scale off by a fraction)
 loses most of its error under the similarity; a bend does not.
 
-Per log, the laser odometry (configs/carmen.toml's ``[scan_matching]``) against the reference:
+Per log, how far the seeds' paths are apart (rigid ATE of every pair of seeds, one against the
+other: the part of the error that changes from run to run) beside their ATE against the reference
+(what they share is either the filter's bias or the reference's own error). Per log, the laser
+odometry (configs/carmen.toml's ``[scan_matching]``) against the reference:
 its path length over the reference's, and the median over the accepted intervals longer than
 0.2 m of its error along the reference's motion as a share of the distance (positive: longer).
 
@@ -19,6 +22,7 @@ laser odometry of every log); writes ``results/drift_checks.md``.
 
 from __future__ import annotations
 
+import itertools
 import tempfile
 from pathlib import Path
 
@@ -68,11 +72,13 @@ def main() -> None:
         run = load(name)
         records = np.flatnonzero(run.log.is_scan)
         reference = run.truth[records]
+        paths = []
         for seed in rows["seed"]:
             path = RESULTS / f"{name}_seed{seed}" / "trajectory.csv"
             if not path.exists():
                 continue
             estimate = pd.read_csv(path).iloc[records][["x", "y", "theta"]].to_numpy()
+            paths.append(estimate[:, :2])
             rigid, similar, scale = similarity_fit(estimate[:, :2], reference[:, :2])
             aligned = apply_se2(align_se2(estimate, reference), estimate)
             heading = np.degrees(np.abs(wrap_angle(aligned[:, 2] - reference[:, 2])))
@@ -92,9 +98,12 @@ def main() -> None:
         truth_length, length = np.hypot(*truth_steps[:, :2].T), np.hypot(*steps[:, :2].T)
         used = odometry.accepted[1:] & (truth_length > 0.2)
         along = np.einsum("ij,ij->i", steps[used, :2], truth_steps[used, :2]) / truth_length[used]
+        apart = [similarity_fit(one, other)[0] for one, other in itertools.combinations(paths, 2)] or [np.nan]
         logs.append(
             {
                 "log": name,
+                "seeds apart: median [m]": np.median(apart),
+                "seeds apart: largest [m]": np.max(apart),
                 "laser odometry / reference length": length.sum() / truth_length.sum(),
                 "median error along the motion [%]": 100 * np.median(along / truth_length[used] - 1),
             }
@@ -113,7 +122,8 @@ def main() -> None:
         "# Scale or bend? (experiments/carmen_grid/drift_checks.py)\n\n"
         "Grid filter's best path at the scans against the reference poses, worst seed: aligned ATE after the best "
         "rigid motion and after the best similarity (the scale range over the seeds, reference over estimate), the "
-        "95th percentile of the heading error after the rigid motion; "
+        "95th percentile of the heading error after the rigid motion; the rigid ATE between every two seeds' "
+        "paths (median and largest: how far the runs are apart, against their ATE to the reference); "
         "the laser odometry's path length over the reference's and its median error along the reference's "
         "motion as a share of the distance over the accepted intervals.\n\n"
         + summary.to_markdown(floatfmt=".4g")
