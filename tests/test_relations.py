@@ -101,6 +101,16 @@ def test_relation_times_take_the_nearest_pose_and_the_last_of_a_shared_time(tmp_
         pairs_at_times(times, relations, max_gap=0.01)
 
 
+def test_poses_without_a_clock_cannot_be_matched_by_time(tmp_path):
+    path = tmp_path / "toy.relations"
+    path.write_text(_relations_text())
+    relations = read_relations(path)
+    with pytest.raises(InputError, match=r"toy.relations:2: both times of the relation fall on one pose \(3 relations"):
+        pairs_at_times(np.zeros(3), relations, max_gap=20.0)
+    with pytest.raises(InputError, match="times decrease"):
+        pairs_at_times(TIMES[::-1], relations, max_gap=0.01)
+
+
 @pytest.mark.parametrize(
     ("text", "message"),
     [

@@ -151,7 +151,16 @@ def pairs_at_times(times: np.ndarray, relations: Relations, max_gap: float) -> n
     times = np.asarray(times, dtype=float)
     if len(times) == 0:
         raise InputError("no poses to score")
+    if np.any(np.diff(times) < 0):
+        raise InputError("the poses' times decrease somewhere: relations are matched by time")
     pairs = np.column_stack([_nearest(times, relations.first), _nearest(times, relations.second)])
+    same = np.flatnonzero((pairs[:, 0] == pairs[:, 1]) & (relations.first != relations.second))
+    if len(same):
+        raise InputError(
+            f"{relations.source}:{relations.lines[same[0]]}: both times of the relation fall on one pose "
+            f"({len(same)} relations so): the poses share their times (a log without a clock cannot be "
+            "matched by time)"
+        )
     gaps = np.abs(times[pairs] - np.column_stack([relations.first, relations.second]))
     missing = np.flatnonzero(gaps.max(axis=1) > max_gap)
     if len(missing):
