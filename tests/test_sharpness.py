@@ -8,7 +8,7 @@ import pytest
 
 from mazeslam import log
 from mazeslam.beams import BeamGeometry
-from mazeslam.evaluation.sharpness import map_sharpness, occupied_cells, path_extent
+from mazeslam.evaluation.sharpness import Sharpness, map_sharpness, occupied_cells, path_extent
 from mazeslam.loaded_run import LoadedRun
 
 BEAMS = 360
@@ -69,3 +69,10 @@ def test_dead_reckoning_leaves_the_glitch_out():
     assert sharp.ratio == 1.0 and sharp.extent_ratio == pytest.approx(1.0)
     with_glitch = map_sharpness(run, truth)  # no tolerance: the glitch moves dead reckoning back
     assert with_glitch.dead_reckoning_cells > with_glitch.cells
+
+
+def test_without_odometry_the_extent_is_given_in_metres():
+    sharp = Sharpness(cells=120, dead_reckoning_cells=100, extent_m=12.5, dead_reckoning_extent_m=0.0)
+    assert sharp.extent_ratio is None and sharp.to_dict()["extent_ratio"] is None
+    assert sharp.extent_text() == "path extent 12.50 m (dead reckoning stands still: the log has no odometry)"
+    assert Sharpness(120, 100, 12.5, 10.0).extent_text() == "path extent x1.25 of dead reckoning's"

@@ -27,6 +27,8 @@ from mazeslam.loaded_run import LoadedRun
 #: The issue's definition: returns of 0.05-0.4 m (the course camera's trusted span), 1 cm cells.
 TRUSTED_SPAN = (0.05, 0.4)
 CELL = 0.01
+#: A path whose bounding box is smaller than this (m) stands still.
+STANDING_STILL = 1e-6
 
 
 def occupied_cells(
@@ -71,12 +73,21 @@ class Sharpness:
         return self.cells / max(self.dead_reckoning_cells, 1)
 
     @property
-    def extent_ratio(self) -> float:
-        """The path's extent over dead reckoning's (a shrunken path looks sharper: keep near 1)."""
-        return self.extent_m / max(self.dead_reckoning_extent_m, 1e-12)
+    def extent_ratio(self) -> float | None:
+        """The path's extent over dead reckoning's (a shrunken path looks sharper: keep near 1);
+        None where dead reckoning stands still (a log without odometry)."""
+        if self.dead_reckoning_extent_m < STANDING_STILL:
+            return None
+        return self.extent_m / self.dead_reckoning_extent_m
 
     def to_dict(self) -> dict:
         return {**asdict(self), "ratio": self.ratio, "extent_ratio": self.extent_ratio}
+
+    def extent_text(self) -> str:
+        """The extent for the terminal: its ratio to dead reckoning's, or metres where that stands still."""
+        if self.extent_ratio is None:
+            return f"path extent {self.extent_m:.2f} m (dead reckoning stands still: the log has no odometry)"
+        return f"path extent x{self.extent_ratio:.2f} of dead reckoning's"
 
 
 def dead_reckoning_without_glitches(run: LoadedRun, jump_tolerance: float) -> np.ndarray:
@@ -124,6 +135,6 @@ def sharpness_lines(sharpness: dict[str, Sharpness], min_range: float, max_range
         "leaves the glitches out):"
     ] + [
         f"  {name}: {value.cells} occupied 1 cm cells against dead reckoning's {value.dead_reckoning_cells} "
-        f"(x{value.ratio:.2f}; fewer = sharper walls), path extent x{value.extent_ratio:.2f} of dead reckoning's"
+        f"(x{value.ratio:.2f}; fewer = sharper walls), {value.extent_text()}"
         for name, value in sharpness.items()
     ]
