@@ -8,7 +8,7 @@ import pytest
 from mazeslam import log
 from mazeslam.envs.laser import VirtualLaser
 from mazeslam.geometry import wrap_angle
-from mazeslam.grid import GridSlam, GridSlamParams
+from mazeslam.grid import GridSlam, GridSlamParams, run_grid_slam
 from mazeslam.grid.filter import ScanSensor
 from mazeslam.grid.synthetic import LASER, building_walls
 
@@ -27,7 +27,7 @@ def poses_after_a_wrong_turn(search: str) -> np.ndarray:
     laser, rng = VirtualLaser(LASER, building_walls()), np.random.default_rng(3)
     params = GridSlamParams(particles=4, search=search)
     sensor = ScanSensor(BEARINGS, np.zeros(2))
-    slam = GridSlam(params, PATH[0], sensor, search_every_scan=search == "every-scan")
+    slam = GridSlam(params, PATH[0], sensor)
     motions = [np.zeros(3)] + [np.array([0.5, 0.0, 0.0])] * (len(PATH) - 2) + [WRONG_MOTION]
     for pose, motion in zip(PATH, motions):
         slam.process(laser.scan(pose, rng), motion)
@@ -46,14 +46,8 @@ def test_searching_only_on_a_failed_match_keeps_that_turn():
     assert np.all(np.abs(wrap_angle(poses[:, 2] - PATH[-1, 2])) > 0.5)
 
 
-def _log(with_odometry: bool) -> log.CourseLog:
-    scan = " ".join(["1.0"] * 4)
-    lines = ["0.0 1 " + scan, "0.5 0 0.1 0.0 -1 -1" if with_odometry else "0.5 1 " + scan, "1.0 1 " + scan]
-    return log.parse("\n".join(lines) + "\n")
-
-
 @pytest.mark.parametrize(
-    ("search", "with_odometry", "every_scan"),
+    ("search", "has_odometry", "every_scan"),
     [
         ("without-odometry", False, True),
         ("without-odometry", True, False),
@@ -61,8 +55,35 @@ def _log(with_odometry: bool) -> log.CourseLog:
         ("failed-match", False, False),
     ],
 )
-def test_when_the_particles_search_at_every_scan(search, with_odometry, every_scan):
-    assert GridSlamParams(search=search).searches_every_scan(_log(with_odometry)) is every_scan
+def test_when_the_search_runs_at_every_scan(search, has_odometry, every_scan):
+    assert GridSlamParams(search=search).searches_every_scan(has_odometry) is every_scan
+
+
+def _log(with_odometry: bool) -> log.CourseLog:
+    """Scans along ``PATH`` from the simulated building's laser, with an odometry record between
+    every two (the true motion) or without any."""
+    laser, rng = VirtualLaser(LASER, building_walls()), np.random.default_rng(4)
+    lines = []
+    for index, pose in enumerate(PATH):
+        if with_odometry and index:
+            lines.append(f"{index - 0.5:.1f} 0 0.5 0.0 " + " ".join(["-1"] * (LASER.beams - 2)))
+        lines.append(f"{index:.1f} 1 " + " ".join(f"{r:.4f}" for r in laser.scan(pose, rng)))
+    return log.parse("\n".join(lines) + "\n")
+
+
+@pytest.mark.parametrize(("with_odometry", "searches"), [(False, len(PATH)), (True, 0)])
+def test_run_grid_slam_searches_every_scan_of_a_log_without_odometry(monkeypatch, with_odometry, searches):
+    calls = []
+    original = GridSlam._searched_offsets
+
+    def counted(self, *args):
+        calls.append(1)
+        return original(self, *args)
+
+    monkeypatch.setattr(GridSlam, "_searched_offsets", counted)
+    params = GridSlamParams(particles=2, linear_update=0.0, motion="wheels")
+    run_grid_slam(_log(with_odometry), LASER.geometry, PATH[0], params)
+    assert len(calls) == searches
 
 
 def test_bad_search_settings_are_named():

@@ -72,14 +72,16 @@ class GridSlamParams:
         rescue: the correlative search run when a refinement fails; rescue_sigma (m, rad) its
             window's standard deviation in position and heading (it reaches ``rescue.window_sigmas``
             of them) and the refinements' prior from its candidates.
-        search: when every particle runs that search: "failed-match" (only when its refinement
-            fails), "every-scan" (at every scan, from the prediction and the search's candidates,
-            the best by likelihood times the prior of ``every_scan_sigma``), or "without-odometry"
-            (every scan on a log with no odometry records, else failed-match).
-        every_scan_sigma: the window's standard deviation (m, rad) at every scan: 2.5 of them reach
-            1 m and 1.75 rad. Without odometry nothing bounds the scan matcher's turn (orebro's
-            laser odometry turns 1.5 rad the wrong way between its scans 212 and 213), and the
-            window must hold the turn back.
+        search: when the wide search runs: "failed-match" (for a particle whose refinement
+            fails, over its own map), "every-scan" (once a scan, over the best particle's map;
+            every particle refines from its prediction and from the search's poses moved onto
+            it, keeping the best, and the failed-match rescue does not run), or
+            "without-odometry" (every scan on a log with no odometry records, else failed-match).
+        every_scan_sigma: standard deviations (m, rad) of the motion at every-scan search: the
+            search's window (2.5 of them reach 1 m and 1.75 rad) and the motion's prior in the
+            proposal and the weights, in place of ``motion_noise``. Without odometry nothing bounds
+            the scan matcher's turn (orebro's laser odometry turns 1.5 rad the wrong way between
+            its scans 212 and 213), and the prior must not hold the turn back.
         map_corrected_motion: before the particles move, the motion is corrected by matching the
             scan against the best particle's map (once per scan; rescue_below and rescue_gain:
             see ``GridSlam._map_corrected_motion``).
@@ -138,9 +140,9 @@ class GridSlamParams:
         """Covariance (3, 3) of the search's window when it runs at every scan (``every_scan_sigma``)."""
         return _window_covariance(self.every_scan_sigma)
 
-    def searches_every_scan(self, course_log: CourseLog) -> bool:
-        """Whether the particles search their maps at every scan of ``course_log`` (``search``)."""
-        return self.search == "every-scan" or (self.search == "without-odometry" and not course_log.is_odometry.any())
+    def searches_every_scan(self, has_odometry: bool) -> bool:
+        """Whether the wide search runs at every scan of a log with or without odometry records (``search``)."""
+        return self.search == "every-scan" or (self.search == "without-odometry" and not has_odometry)
 
     def motion_covariance(self, motion: np.ndarray) -> np.ndarray:
         """Covariance (3, 3) of a motion ``(dx, dy, dtheta)`` between processed scans."""
@@ -175,12 +177,13 @@ class ScanSensor:
 
 class GridSlam:
     """The particle cloud: poses (P, 3) world frame, log weights (P,), maps (P ``TiledGrid``) and
-    each path's summed log likelihood (P,) (``best_particle``). ``search_every_scan``: the wide
-    search runs at every scan and every particle refines from its poses
-    (``GridSlamParams.searches_every_scan``)."""
+    each path's summed log likelihood (P,) (``best_particle``). ``has_odometry``: whether the log
+    has odometry records, which with ``params.search`` says whether the wide search runs at every
+    scan (``GridSlamParams.searches_every_scan``)."""
 
-    def __init__(self, params: GridSlamParams, start_pose, sensor: ScanSensor, search_every_scan: bool = False):
-        self.params, self.sensor, self.search_every_scan = params, sensor, search_every_scan
+    def __init__(self, params: GridSlamParams, start_pose, sensor: ScanSensor, has_odometry: bool = True):
+        self.params, self.sensor = params, sensor
+        self.search_every_scan = params.searches_every_scan(has_odometry)
         count = params.particles
         self.poses = np.tile(np.asarray(start_pose, dtype=float), (count, 1))
         self.log_weights = np.zeros(count)
@@ -209,7 +212,10 @@ class GridSlam:
         points = match_points(trusted, self.sensor.bearings, self.sensor.mount, self.params.match)
         if self.params.map_corrected_motion:
             motion = self._map_corrected_motion(motion, points)
-        covariance = self.params.motion_covariance(motion)
+        if self.search_every_scan:
+            covariance = self.params.every_scan_covariance
+        else:
+            covariance = self.params.motion_covariance(motion)
         information = np.linalg.inv(covariance)
         offsets = self._searched_offsets(points, motion, rays) if self.search_every_scan else np.zeros((0, 3))
         log_etas, matched = np.zeros(len(self.poses)), 0
@@ -252,7 +258,7 @@ class GridSlam:
         prediction and the scan's searched poses moved onto it, ``_searched_offsets``)."""
         match = self.params.match
         if seeds is not None:
-            mode = self._best_refinement(field, points, predicted, self.params.every_scan_covariance, seeds)
+            mode = self._best_refinement(field, points, predicted, information, seeds)
         else:
             mode = refine_pose(field, points, predicted, information, match)
             if field.overlap(mode, points, match) < match.min_overlap:
@@ -280,19 +286,18 @@ class GridSlam:
         ``N(predicted, covariance)`` (3, 3) that also sets the search's window."""
         grid = LikelihoodGrid(field.occupied_points(), self.params.rescue)
         seeds = np.vstack([predicted, correlative_candidates(grid, points, predicted, covariance, self.params.rescue)])
-        return self._best_refinement(field, points, predicted, covariance, seeds)
+        return self._best_refinement(field, points, predicted, np.linalg.inv(covariance), seeds)
 
     def _best_refinement(
         self,
         field: LikelihoodField,
         points: np.ndarray,
         predicted: np.ndarray,
-        covariance: np.ndarray,
+        information: np.ndarray,
         seeds: np.ndarray,
     ) -> np.ndarray:
         """The best pose (3,) of the refinements from ``seeds`` (C, 3), by likelihood times the
-        prior ``N(predicted, covariance)``."""
-        information = np.linalg.inv(covariance)
+        prior ``N(predicted, information^-1)`` (information (3, 3))."""
         refined = np.array(
             [refine_pose(field, points, predicted, information, self.params.match, seed) for seed in seeds]
         )
@@ -489,9 +494,7 @@ def run_grid_slam(
     motion_seconds = time.perf_counter() - began
     records = np.flatnonzero(course_log.is_scan)
     count, particles = len(records), params.particles
-    slam = GridSlam(
-        params, start_pose, ScanSensor.of(geometry, course_log.width), params.searches_every_scan(course_log)
-    )
+    slam = GridSlam(params, start_pose, ScanSensor.of(geometry, course_log.width), bool(course_log.is_odometry.any()))
     node_poses, node_parents = np.empty((count, particles, 3)), np.empty((count, particles), dtype=int)
     mean_poses, covariances = np.empty((count, 3)), np.empty((count, 3, 3))
     processed, resampled = np.zeros(count, bool), np.zeros(count, bool)
