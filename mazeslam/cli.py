@@ -744,7 +744,8 @@ def demo(out_dir, seed, quiet):
 def relations(trajectory, relations_file, reference, max_time_gap):
     """Score a trajectory by the relation metric of Kümmerle et al. (2009) against RELATIONS_FILE.
 
-    TRAJECTORY: a `mazeslam slam` output folder, its trajectory.csv, or a truth CSV (t,x,y,theta).
+    TRAJECTORY: a `mazeslam slam` output folder (its best_trajectory.csv, else trajectory.csv), a
+    trajectory CSV, or a truth CSV (t,x,y,theta).
     RELATIONS_FILE: one relation a line, `t1 t2 x y z roll pitch yaw`: the reference motion from the
     pose at time t1 to the pose at t2, in the first pose's frame (the format of the benchmark's
     hand-verified relations). Each time takes the pose nearest it."""

@@ -14,18 +14,27 @@ from mazeslam.config import InputError, read_text
 from mazeslam.evaluation.relations import read_relations, relations_metric
 from mazeslam.sidecars import TRUTH_HEADER, read_trajectory, read_truth
 
+#: In a run folder, the path scored: the best particle's (consistent with the map, and the path the
+#: CARMEN tables score), else the folder's trajectory.csv (the mean, or a smoother's only path).
+RUN_FOLDER_PATHS = ("best_trajectory.csv", "trajectory.csv")
 
-def read_poses(path: str | Path) -> tuple[np.ndarray, np.ndarray]:
-    """Times (R,) s and poses (R, 3) (x m, y m, theta rad) of a trajectory: a ``mazeslam slam`` or
-    ``smooth`` output folder (its trajectory.csv), a trajectory CSV, or a truth CSV (``t,x,y,theta``,
-    e.g. the reference poses ``mazeslam import carmen`` writes beside the log)."""
+
+def trajectory_file(path: str | Path) -> Path:
+    """The CSV a ``relations`` argument names: the file itself, or in a ``mazeslam slam`` or
+    ``smooth`` output folder the first of ``RUN_FOLDER_PATHS`` that exists."""
     path = Path(path)
-    if path.is_dir():
-        path = path / "trajectory.csv"
-        if not path.exists():
-            raise InputError(f"{path.parent}: no trajectory.csv in the folder (give a run folder or a CSV)")
-    header = read_text(path, "trajectory").partition("\n")[0].strip().replace(" ", "")
-    if header == TRUTH_HEADER:
+    if not path.is_dir():
+        return path
+    for name in RUN_FOLDER_PATHS:
+        if (path / name).exists():
+            return path / name
+    raise InputError(f"{path}: none of {', '.join(RUN_FOLDER_PATHS)} in the folder (give a run folder or a CSV)")
+
+
+def read_poses(path: Path) -> tuple[np.ndarray, np.ndarray]:
+    """Times (R,) s and poses (R, 3) (x m, y m, theta rad) of a trajectory CSV or a truth CSV
+    (``t,x,y,theta``, e.g. the reference poses ``mazeslam import carmen`` writes beside the log)."""
+    if read_text(path, "trajectory").partition("\n")[0].strip().replace(" ", "") == TRUTH_HEADER:
         return read_truth(path)
     times, poses, _ = read_trajectory(path)
     return times, poses
@@ -36,24 +45,23 @@ def relations_lines(
 ) -> list[str]:
     """The terminal report: the trajectory's relation errors, the reference's and their ratio."""
     relations = read_relations(relations_path)
-    scored = {str(trajectory): relations_metric(*read_poses(trajectory), relations, max_gap)}
-    if reference is not None:
-        scored[str(reference)] = relations_metric(*read_poses(reference), relations, max_gap)
+    files = [trajectory_file(trajectory)] + ([] if reference is None else [trajectory_file(reference)])
+    scored = [(file, relations_metric(*read_poses(file), relations, max_gap, str(file))) for file in files]
     lines = [f"{relations_path}: {len(relations.motions)} relations (Kümmerle et al. 2009: mean ± std of the errors)"]
     lines += [
-        f"  {name}: translation {metric['trans_mean']:.4f} ± {metric['trans_std']:.4f} m, "
+        f"  {file}: translation {metric['trans_mean']:.4f} ± {metric['trans_std']:.4f} m, "
         f"rotation {math.degrees(metric['rot_mean']):.3f} ± {math.degrees(metric['rot_std']):.3f} deg"
-        for name, metric in scored.items()
+        for file, metric in scored
     ]
     if reference is not None:
-        ours, theirs = scored.values()
+        (_, ours), (_, theirs) = scored
         lines.append(
-            f"  trajectory over reference: translation x{_ratio(ours['trans_mean'], theirs['trans_mean'])}, "
-            f"rotation x{_ratio(ours['rot_mean'], theirs['rot_mean'])}"
+            f"  trajectory over reference: translation {_ratio(ours['trans_mean'], theirs['trans_mean'])}, "
+            f"rotation {_ratio(ours['rot_mean'], theirs['rot_mean'])}"
         )
     return lines
 
 
 def _ratio(ours: float, theirs: float) -> str:
-    """``ours / theirs`` for the report; none where the reference scores 0 (the relations are its own)."""
-    return f"{ours / theirs:.2f}" if theirs > 1e-9 else " n/a (the reference scores 0)"
+    """``x(ours / theirs)`` for the report; none where the reference scores 0 (the relations are its own)."""
+    return f"x{ours / theirs:.2f}" if theirs > 1e-9 else "none (the reference scores 0)"

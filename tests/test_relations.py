@@ -97,7 +97,9 @@ def test_relation_times_take_the_nearest_pose_and_the_last_of_a_shared_time(tmp_
     relations = read_relations(path)
     np.testing.assert_array_equal(pairs_at_times(times, relations, max_gap=0.03), [[2, 4], [4, 5], [2, 5]])
     assert relations_metric(times, poses, relations, max_gap=0.03)["trans_mean"] == pytest.approx(0.4 / 3)
-    with pytest.raises(InputError, match=r"toy.relations:2: no pose within 0.01 s of t = 10.020000 \(3 of 3"):
+    with pytest.raises(
+        InputError, match=r"toy.relations:2: no pose of the trajectory within 0.01 s of t = 10.020000 \(3 of 3"
+    ):
         pairs_at_times(times, relations, max_gap=0.01)
 
 
@@ -105,10 +107,19 @@ def test_poses_without_a_clock_cannot_be_matched_by_time(tmp_path):
     path = tmp_path / "toy.relations"
     path.write_text(_relations_text())
     relations = read_relations(path)
-    with pytest.raises(InputError, match=r"toy.relations:2: both times of the relation fall on one pose \(3 relations"):
-        pairs_at_times(np.zeros(3), relations, max_gap=20.0)
-    with pytest.raises(InputError, match="times decrease"):
-        pairs_at_times(TIMES[::-1], relations, max_gap=0.01)
+    with pytest.raises(
+        InputError, match=r"toy.relations:2: both times of the relation fall on one pose of run.csv \(3"
+    ):
+        pairs_at_times(np.zeros(3), relations, max_gap=20.0, source="run.csv")
+    with pytest.raises(InputError, match="run.csv: the times decrease"):
+        pairs_at_times(TIMES[::-1], relations, max_gap=0.01, source="run.csv")
+
+
+def test_a_run_that_ended_early_is_named_as_such(tmp_path):
+    path = tmp_path / "toy.relations"
+    path.write_text(_relations_text() + "12.0 13.0 1 0 0 0 0 0\n")
+    with pytest.raises(InputError, match=r"toy.relations:6: no pose of the trajectory within 0.05 s of t = 12.000000"):
+        pairs_at_times(TIMES, read_relations(path), max_gap=0.05)
 
 
 @pytest.mark.parametrize(
@@ -130,7 +141,8 @@ def test_a_broken_relations_file_names_the_file_and_line(tmp_path, text, message
 def test_the_relations_command_scores_a_run_folder_beside_a_reference(tmp_path):
     folder = tmp_path / "run"
     folder.mkdir()
-    write_trajectory(folder / "trajectory.csv", TIMES, ESTIMATE, np.zeros((3, 3, 3)))
+    write_trajectory(folder / "best_trajectory.csv", TIMES, ESTIMATE, np.zeros((3, 3, 3)))
+    write_trajectory(folder / "trajectory.csv", TIMES, REFERENCE, np.zeros((3, 3, 3)))  # the mean: not scored
     # A reference 1 cm off on pose 1 (along x: it changes relations (0, 1) and (1, 2) by 1 cm each).
     reference = REFERENCE + np.array([[0.0, 0.0, 0.0], [0.01, 0.0, 0.0], [0.0, 0.0, 0.0]])
     write_truth(tmp_path / "reference.truth.csv", TIMES, reference)
@@ -149,6 +161,18 @@ def test_the_relations_command_scores_a_run_folder_beside_a_reference(tmp_path):
     assert result.exit_code == 0, result.output
     lines = result.output.splitlines()
     assert "3 relations" in lines[0]
+    assert "best_trajectory.csv: " in lines[1]
     assert f"translation {0.4 / 3:.4f} ± {np.std([0.2, 0.2, 0.0]):.4f} m" in lines[1]
     assert f"translation {0.02 / 3:.4f}" in lines[2]
     assert f"translation x{(0.4 / 3) / (0.02 / 3):.2f}" in lines[3]
+
+
+def test_a_trajectory_scored_against_itself_as_reference(tmp_path):
+    write_truth(tmp_path / "a.truth.csv", TIMES, ESTIMATE)
+    (tmp_path / "toy.relations").write_text(_relations_text())
+    truth = str(tmp_path / "a.truth.csv")
+    result = CliRunner().invoke(
+        main, ["relations", truth, str(tmp_path / "toy.relations"), "--reference", truth], catch_exceptions=False
+    )
+    assert result.exit_code == 0, result.output
+    assert "trajectory over reference: translation x1.00, rotation x1.00" in result.output

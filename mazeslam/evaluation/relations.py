@@ -144,31 +144,35 @@ def read_relations(path: str | Path) -> Relations:
     return Relations(table[:, 0], table[:, 1], table[:, [2, 3, 7]], np.array(lines), str(path))
 
 
-def pairs_at_times(times: np.ndarray, relations: Relations, max_gap: float) -> np.ndarray:
+def pairs_at_times(
+    times: np.ndarray, relations: Relations, max_gap: float, source: str = "the trajectory"
+) -> np.ndarray:
     """For each relation, the indexes (K, 2) of the poses at ``times`` (R,) (s, non-decreasing)
-    nearest its two times. A relation time with no pose within ``max_gap`` s is an error naming its
-    line (a run that ended early, or another log's relations)."""
+    nearest its two times. Errors name ``source`` (the poses' file) or the relation's line: a
+    relation time with no pose within ``max_gap`` s (a run that ended early, or another log's
+    relations), and a relation whose two times fall on one pose (poses without a clock)."""
     times = np.asarray(times, dtype=float)
     if len(times) == 0:
-        raise InputError("no poses to score")
+        raise InputError(f"{source}: no poses to score")
     if np.any(np.diff(times) < 0):
-        raise InputError("the poses' times decrease somewhere: relations are matched by time")
+        raise InputError(f"{source}: the times decrease somewhere; relations are matched by time")
     pairs = np.column_stack([_nearest(times, relations.first), _nearest(times, relations.second)])
-    same = np.flatnonzero((pairs[:, 0] == pairs[:, 1]) & (relations.first != relations.second))
-    if len(same):
-        raise InputError(
-            f"{relations.source}:{relations.lines[same[0]]}: both times of the relation fall on one pose "
-            f"({len(same)} relations so): the poses share their times (a log without a clock cannot be "
-            "matched by time)"
-        )
     gaps = np.abs(times[pairs] - np.column_stack([relations.first, relations.second]))
     missing = np.flatnonzero(gaps.max(axis=1) > max_gap)
     if len(missing):
         row = missing[0]
         wanted = relations.first[row] if gaps[row, 0] > max_gap else relations.second[row]
         raise InputError(
-            f"{relations.source}:{relations.lines[row]}: no pose within {max_gap:g} s of t = {wanted:.6f} "
-            f"({len(missing)} of {len(pairs)} relations so; the poses span {times[0]:.6f}-{times[-1]:.6f} s)"
+            f"{relations.source}:{relations.lines[row]}: no pose of {source} within {max_gap:g} s of "
+            f"t = {wanted:.6f} ({len(missing)} of {len(pairs)} relations so; the poses span "
+            f"{times[0]:.6f}-{times[-1]:.6f} s)"
+        )
+    same = np.flatnonzero((pairs[:, 0] == pairs[:, 1]) & (relations.first != relations.second))
+    if len(same):
+        raise InputError(
+            f"{relations.source}:{relations.lines[same[0]]}: both times of the relation fall on one pose of "
+            f"{source} ({len(same)} relations so): its poses share their times (poses without a clock cannot "
+            "be matched by time)"
         )
     return pairs
 
@@ -183,8 +187,11 @@ def _nearest(times: np.ndarray, wanted: np.ndarray) -> np.ndarray:
     return np.searchsorted(times, np.where(later, times[after], times[before]), side="right") - 1
 
 
-def relations_metric(times: np.ndarray, poses: np.ndarray, relations: Relations, max_gap: float) -> dict[str, float]:
+def relations_metric(
+    times: np.ndarray, poses: np.ndarray, relations: Relations, max_gap: float, source: str = "the trajectory"
+) -> dict[str, float]:
     """Kümmerle et al.'s metric (``error_summary``) of the poses (R, 3) at ``times`` (R,) (s; x m,
-    y m, theta rad, any world frame) against a relations file's reference motions."""
-    pairs = pairs_at_times(times, relations, max_gap)
+    y m, theta rad, any world frame) against a relations file's reference motions; errors name
+    ``source`` (see ``pairs_at_times``)."""
+    pairs = pairs_at_times(times, relations, max_gap, source)
     return error_summary(motion_errors(_motions(np.asarray(poses, dtype=float), pairs), relations.motions))
