@@ -71,8 +71,14 @@ def test_dead_reckoning_leaves_the_glitch_out():
     assert with_glitch.dead_reckoning_cells > with_glitch.cells
 
 
-def test_without_odometry_the_extent_is_given_in_metres():
+def test_without_odometry_the_path_is_described_on_its_own():
     sharp = Sharpness(cells=120, dead_reckoning_cells=100, extent_m=12.5, dead_reckoning_extent_m=0.0)
     assert sharp.extent_ratio is None and sharp.to_dict()["extent_ratio"] is None
-    assert sharp.extent_text() == "path extent 12.50 m (dead reckoning stands still: the log has no odometry)"
-    assert Sharpness(120, 100, 12.5, 10.0).extent_text() == "path extent x1.25 of dead reckoning's"
+    assert sharp.describe("best") == (
+        "  best: 120 occupied 1 cm cells, path extent 12.50 m (dead reckoning stands still, as on a log without "
+        "odometry: nothing to compare with)"
+    )
+    assert Sharpness(120, 100, 12.5, 10.0).describe("best") == (
+        "  best: 120 occupied 1 cm cells against dead reckoning's 100 (x1.20; fewer = sharper walls), "
+        "path extent x1.25 of dead reckoning's"
+    )

@@ -83,11 +83,18 @@ class Sharpness:
     def to_dict(self) -> dict:
         return {**asdict(self), "ratio": self.ratio, "extent_ratio": self.extent_ratio}
 
-    def extent_text(self) -> str:
-        """The extent for the terminal: its ratio to dead reckoning's, or metres where that stands still."""
+    def describe(self, name: str) -> str:
+        """A line for the terminal: the counts, their ratio and the extents' (without a dead
+        reckoning that moves, the path's own count and extent in metres)."""
         if self.extent_ratio is None:
-            return f"path extent {self.extent_m:.2f} m (dead reckoning stands still: the log has no odometry)"
-        return f"path extent x{self.extent_ratio:.2f} of dead reckoning's"
+            return (
+                f"  {name}: {self.cells} occupied 1 cm cells, path extent {self.extent_m:.2f} m (dead reckoning "
+                "stands still, as on a log without odometry: nothing to compare with)"
+            )
+        return (
+            f"  {name}: {self.cells} occupied 1 cm cells against dead reckoning's {self.dead_reckoning_cells} "
+            f"(x{self.ratio:.2f}; fewer = sharper walls), path extent x{self.extent_ratio:.2f} of dead reckoning's"
+        )
 
 
 def dead_reckoning_without_glitches(run: LoadedRun, jump_tolerance: float) -> np.ndarray:
@@ -133,8 +140,4 @@ def sharpness_lines(sharpness: dict[str, Sharpness], min_range: float, max_range
     return [
         f"Map sharpness (scan returns of {min_range:g}-{max_range:g} m placed along each path; dead reckoning "
         "leaves the glitches out):"
-    ] + [
-        f"  {name}: {value.cells} occupied 1 cm cells against dead reckoning's {value.dead_reckoning_cells} "
-        f"(x{value.ratio:.2f}; fewer = sharper walls), {value.extent_text()}"
-        for name, value in sharpness.items()
-    ]
+    ] + [value.describe(name) for name, value in sharpness.items()]
