@@ -5,7 +5,9 @@ Per (log, seed) of ``results/table.csv``, from the trajectory run.py wrote (``re
 trajectory.csv``, best particle at every record), at the scans against the reference poses:
 the aligned ATE after the best rigid motion (as the table) and after the best similarity (rigid
 motion and scale, Umeyama 1991), and that scale (reference over estimate); the 95th percentile of
-the heading error after the rigid alignment. A filter whose path is
+the heading error after the rigid alignment; the steps between consecutive scans more than
+``WRONG_STEP`` (0.3 m or 0.1 rad) off the reference's, and which (numbered from 1, step ``k`` from
+scan ``k - 1`` to scan ``k``, as orebro_checks numbers intervals) where there are few. A filter whose path is
 right but uniformly too long or too short (a laser odometry or a range scale off by a fraction)
 loses most of its error under the similarity; a bend does not.
 
@@ -40,6 +42,9 @@ HERE = Path(__file__).resolve().parent
 CARMEN = HERE.parents[2] / "shared" / "data" / "carmen"
 RESULTS = HERE / "results"
 CONFIG = HERE.parents[1] / "configs" / "carmen.toml"
+#: A step between consecutive scans this far off the reference's (m, rad) is wrong; up to
+#: ``LISTED`` wrong steps of a run are listed.
+WRONG_STEP, LISTED = (0.3, 0.1), 15
 
 
 def similarity_fit(estimate: np.ndarray, reference: np.ndarray) -> tuple[float, float, float]:
@@ -55,6 +60,14 @@ def similarity_fit(estimate: np.ndarray, reference: np.ndarray) -> tuple[float, 
         return float(np.sqrt(np.mean(np.sum((centred_r - factor * centred_e @ rotation.T) ** 2, axis=1))))
 
     return rmse(1.0), rmse(scale), scale
+
+
+def wrong_steps(estimate: np.ndarray, reference: np.ndarray) -> np.ndarray:
+    """Numbers (from 1) of the steps between consecutive poses of ``estimate`` (S, 3) whose motion
+    is more than ``WRONG_STEP`` off ``reference``'s (S, 3)."""
+    error = relative(relative(reference[:-1], reference[1:]), relative(estimate[:-1], estimate[1:]))
+    off = (np.hypot(error[:, 0], error[:, 1]) > WRONG_STEP[0]) | (np.abs(wrap_angle(error[:, 2])) > WRONG_STEP[1])
+    return np.flatnonzero(off) + 1
 
 
 def load(name: str) -> LoadedRun:
@@ -82,6 +95,7 @@ def main() -> None:
             rigid, similar, scale = similarity_fit(estimate[:, :2], reference[:, :2])
             aligned = apply_se2(align_se2(estimate, reference), estimate)
             heading = np.degrees(np.abs(wrap_angle(aligned[:, 2] - reference[:, 2])))
+            wrong = wrong_steps(estimate, reference)
             seeds.append(
                 {
                     "log": name,
@@ -90,6 +104,8 @@ def main() -> None:
                     "similarity ATE [m]": similar,
                     "scale": scale,
                     "heading error p95 [deg]": np.percentile(heading, 95),
+                    "wrong steps": len(wrong),
+                    "which": " ".join(map(str, wrong)) if len(wrong) <= LISTED else "",
                 }
             )
         odometry = laser_odometry(run.log, run.geometry, scan_matching)
@@ -116,13 +132,16 @@ def main() -> None:
             "similarity ATE worst [m]": grouped["similarity ATE [m]"].max(),
             "scale range": grouped["scale"].apply(lambda s: f"{s.min():.4f}-{s.max():.4f}"),
             "heading error p95, worst [deg]": grouped["heading error p95 [deg]"].max(),
+            "wrong steps, most": grouped["wrong steps"].max(),
         }
     ).join(pd.DataFrame(logs).set_index("log"))
     text = (
         "# Scale or bend? (experiments/carmen_grid/drift_checks.py)\n\n"
         "Grid filter's best path at the scans against the reference poses, worst seed: aligned ATE after the best "
         "rigid motion and after the best similarity (the scale range over the seeds, reference over estimate), the "
-        "95th percentile of the heading error after the rigid motion; the rigid ATE between every two seeds' "
+        "95th percentile of the heading error after the rigid motion; the most steps between consecutive scans "
+        "more than 0.3 m or 0.1 rad off the reference's in one seed (per seed: which, numbered as orebro_checks' "
+        "intervals, where at most 15); the rigid ATE between every two seeds' "
         "paths (median and largest: how far the runs are apart, against their ATE to the reference); "
         "the laser odometry's path length over the reference's and its median error along the reference's "
         "motion as a share of the distance over the accepted intervals.\n\n"

@@ -98,7 +98,8 @@ def before_after(after: pd.DataFrame, before: pd.DataFrame) -> None:
     text = (
         "Grid filter, aligned ATE of the best path against the reference, the same filter seeds before "
         "(table_before.csv: map correction on, best particle by the tempered weights) and after (table.csv: "
-        "map correction off, best particle by the summed log likelihood).\n\n" + rows.to_markdown(floatfmt=".3g") + "\n"
+        "map correction off, best particle by the summed log likelihood; for orebro, the only log without "
+        "odometry, also the search at every scan).\n\n" + rows.to_markdown(floatfmt=".3g") + "\n"
     )
     (RESULTS / "before_after.md").write_text(text)
     print(text)

@@ -308,9 +308,9 @@ class GridSlam:
         scan's ``points`` over the best particle's map, around its pose moved by ``motion`` (window
         ``every_scan_sigma``), as poses relative to that prediction. Every particle refines from
         them, moved onto its own prediction, against its own map: the particles' maps share most
-        tiles, and one search a scan costs a fifth of one per particle (orebro seed 0: 93 against
-        485 CPU s, both 0.49 m). The map is read as far as the scan reaches around the
-        prediction in any direction (a turned candidate's points lie there)."""
+        tiles, and one search a scan costs a small part of one per particle. The map is read as far
+        as the scan reaches around the prediction in any direction (a turned candidate's points lie
+        there)."""
         best = self.best_particle()
         grid, predicted = self.maps[best], compose(self.poses[best], motion)
         if not grid.tiles or len(points) < 3:
