@@ -4,9 +4,10 @@ import numpy as np
 import pytest
 from conftest import PROJECT_ROOT, SHARED_DATA
 
+from mazeslam import sidecars
 from mazeslam.config import load_toml
 from mazeslam.filters.corners import CornerExtractor, CornerParams
-from mazeslam.imports.carmen import front_laser, is_carmen, read_carmen
+from mazeslam.imports.carmen import front_laser, import_carmen, is_carmen, read_carmen
 from mazeslam.log import LogFormatError
 
 CARMEN = SHARED_DATA / "carmen"
@@ -165,3 +166,74 @@ def test_laser_odometry_on_real_scans_beats_the_wheels(name, scans, tmp_path):
     lasers = absolute_trajectory_error(laser.poses(start), at_scans)["rmse"]
     assert laser.accepted[1:].mean() > 0.9
     assert lasers < wheels / 3
+
+
+def robotlaser(ranges, laser_pose, robot_pose, t, start=-np.pi / 2, resolution=np.pi / 4, remissions=()):
+    """A ROBOTLASER1 line (the newer CARMEN laser message), written by hand."""
+    fields = ["ROBOTLASER1", 0, start, resolution * (len(ranges) - 1), resolution, 30.0, 0.01, 0, len(ranges)]
+    fields += list(ranges) + [len(remissions)] + list(remissions) + list(laser_pose) + list(robot_pose)
+    fields += [0.0] * 5 + [t, "nohost", t]
+    return " ".join(str(f) for f in fields)
+
+
+ROBOTLASER_SAMPLE = "\n".join(
+    [
+        "ODOM 0.0 0.0 0.0 0 0 0 10.0 nohost 10.0",
+        robotlaser([1, 2, 3, 2, 1], (0.1, 0.0, 0.0), (0.0, 0.0, 0.0), 10.5),
+        "ODOM 0.1 0.0 0.05 0 0 0 11.0 nohost 11.0",
+        robotlaser([1.5, 2.5, 3.5, 2.5, 1.5], (0.6, 0.25, 0.2), (0.5, 0.25, 0.2), 11.5, remissions=(0.3, 0.4)),
+    ]
+)
+
+
+def test_read_robotlaser_lines(tmp_path):
+    path = tmp_path / "new.log"
+    path.write_text(ROBOTLASER_SAMPLE + "\n")
+    assert is_carmen(path)
+    log = read_carmen(path)
+    np.testing.assert_allclose(log.ranges, [[1, 2, 3, 2, 1], [1.5, 2.5, 3.5, 2.5, 1.5]])
+    np.testing.assert_allclose(log.scan_poses, [[0.1, 0.0, 0.0], [0.6, 0.25, 0.2]])  # the laser's pose
+    np.testing.assert_allclose(log.scan_odometry[1], [0.5, 0.25, 0.2])  # the robot's
+    np.testing.assert_allclose(log.scan_times, [10.5, 11.5])
+    assert log.sequence == [("odom", 0), ("scan", 0), ("odom", 1), ("scan", 1)]
+    np.testing.assert_allclose(np.degrees(log.beam_geometry.bearings(5)), [-90, -45, 0, 45, 90], atol=1e-9)
+    assert log.max_range == 30.0
+
+
+def test_flaser_lines_are_read_where_a_log_has_both(tmp_path):
+    path = tmp_path / "both.log"
+    path.write_text(SAMPLE + ROBOTLASER_SAMPLE + "\n")
+    log = read_carmen(path)
+    np.testing.assert_allclose(log.ranges[1], [1.5, 2.5, 3.5, 2.5, 1.5])
+    np.testing.assert_allclose(log.scan_poses[1], [0.6, 0.25, 0.2])
+    assert log.ignored["ROBOTLASER1"] == 2 and log.geometry is None and len(log.scan_times) == 2
+
+
+def test_robotlaser_import_records_its_beams(tmp_path):
+    path = tmp_path / "new.log"
+    path.write_text(ROBOTLASER_SAMPLE.replace("-1.5707963267948966", "-0.7853981633974483") + "\n")
+    import_carmen(path, tmp_path / "new_course.log")
+    sensor = sidecars.read_map(sidecars.map_path(tmp_path / "new_course.log"))["sensor"]
+    bearings = sidecars.beam_geometry(sensor).bearings(5)
+    np.testing.assert_allclose(np.degrees(bearings), [-45, 0, 45, 90, 135], atol=1e-9)
+    assert sensor["max_range"] == 30.0
+
+
+@pytest.mark.parametrize(
+    ("line", "message"),
+    [
+        (
+            robotlaser([1, 2, 3, 2, 1], (0, 0, 0), (0, 0, 0), 12.0, start=-1.0),
+            r"bad.log:3: bad ROBOTLASER1 line: its beams",
+        ),
+        (
+            robotlaser([1, 2, 3, 2, 1], (0, 0, 0), (0, 0, 0), 12.0).rsplit(" ", 8)[0],
+            r"bad.log:3: bad ROBOTLASER1 line: .*needs",
+        ),
+    ],
+)
+def test_malformed_robotlaser_names_the_line(tmp_path, line, message):
+    path = tmp_path / "bad.log"
+    path.write_text("\n".join(ROBOTLASER_SAMPLE.splitlines()[:2] + [line]) + "\n")
+    with pytest.raises(LogFormatError, match=message):
+        read_carmen(path)

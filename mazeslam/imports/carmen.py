@@ -3,13 +3,21 @@
 Lines (whitespace separated) this reader uses::
 
     FLASER n r_1 .. r_n x y theta odom_x odom_y odom_theta timestamp host logger_timestamp
+    ROBOTLASER1 laser_type start_angle field_of_view angular_resolution maximum_range accuracy
+        remission_mode n r_1 .. r_n num_remissions [remissions] laser_x laser_y laser_theta
+        robot_x robot_y robot_theta tv rv forward_safety_dist side_safety_dist turn_axis
+        timestamp host logger_timestamp
     ODOM x y theta tv rv accel timestamp host logger_timestamp
     PARAM name value ...
 
 FLASER is the front laser: n ranges in metres from -90 degrees (right) counter-clockwise, one
 degree apart for 180/181 beams, half a degree for 360/361 (``front_laser``); ``x y theta`` is the corrected
-(reference) pose of the scan, ``odom_*`` the raw odometry pose. Every other message type (NEFF,
-RLASER, SYNC, comments, ...) is counted and otherwise ignored.
+(reference) pose of the scan, ``odom_*`` the raw odometry pose. ROBOTLASER1, the newer CARMEN
+format, says its beams itself (first beam at ``start_angle``, ``angular_resolution`` apart, rad)
+and its range limit; the laser's pose is the scan's reference pose, as FLASER's. A log with FLASER
+lines is read from them (a ROBOTLASER1 line beside them repeats the scan); one without, from its
+ROBOTLASER1 lines. Every other message type (NEFF, RLASER, SYNC, comments, ...) is counted and
+otherwise ignored.
 """
 
 from __future__ import annotations
@@ -35,11 +43,14 @@ class CarmenLog:
         scan_times: (S,) seconds (the message timestamp).
         ranges: (S, N) metres.
         scan_poses: (S, 3) the corrected pose of each scan (x, y, theta), a reference, not truth.
-        scan_odometry: (S, 3) the odometry pose stored with each scan.
+        scan_odometry: (S, 3) the odometry pose stored with each scan (FLASER; ROBOTLASER1: the
+            robot's pose).
         odometry_times: (K,) seconds; odometry_poses: (K, 3) ODOM poses.
         params: PARAM name -> value (text).
         ignored: message type -> count of the lines not used.
-        sequence: the FLASER and ODOM messages in file order, as ("scan", i) / ("odom", j).
+        sequence: the scan and ODOM messages in file order, as ("scan", i) / ("odom", j).
+        geometry: the beams ROBOTLASER1 lines give (None for FLASER: ``front_laser``).
+        laser_max_range: ROBOTLASER1's maximum range, m (None for FLASER).
     """
 
     source: str
@@ -52,15 +63,23 @@ class CarmenLog:
     params: dict = field(default_factory=dict)
     ignored: Counter = field(default_factory=Counter)
     sequence: list = field(default_factory=list)
+    geometry: BeamGeometry | None = None
+    laser_max_range: float | None = None
 
     @property
     def n_beams(self) -> int:
         return self.ranges.shape[1]
 
     @property
+    def beam_geometry(self) -> BeamGeometry:
+        """The scans' beams: ROBOTLASER1's own, else the front laser's (``front_laser``)."""
+        return self.geometry if self.geometry is not None else front_laser(self.n_beams)
+
+    @property
     def max_range(self) -> float:
-        """The laser's maximum range (m): the ``robot_front_laser_max`` PARAM, else the largest reading."""
-        value = self.params.get("robot_front_laser_max")
+        """The laser's maximum range (m): the ``robot_front_laser_max`` PARAM, else ROBOTLASER1's
+        maximum range, else the largest reading."""
+        value = self.params.get("robot_front_laser_max", self.laser_max_range)
         try:
             limit = float(value) if value is not None else math.nan
         except ValueError:
@@ -90,46 +109,91 @@ def _numbers(texts: list[str], what: str) -> list[float]:
     return values
 
 
+def _ranges(texts: list[str], what: str) -> list[float]:
+    """Range readings (m) as numbers, each at least 0 and of sane size."""
+    values = _numbers(texts, what)
+    if min(values) < 0 or max(values) > MAX_VALUE:
+        raise ValueError("a range is negative or implausibly large")
+    return values
+
+
+def _count(text: str) -> int:
+    """A scan's beam count, 2 to ``MAX_BEAMS``."""
+    n = int(text)
+    if not 2 <= n <= MAX_BEAMS:
+        raise ValueError(f"{n} ranges: a laser scan has 2 to {MAX_BEAMS}")
+    return n
+
+
+def _flaser(parts: list[str]) -> tuple[list[float], tuple]:
+    """A FLASER line's ranges, pose, odometry pose and timestamp, and its beam count."""
+    n = _count(parts[1])
+    if len(parts) < n + 9:
+        raise ValueError(f"FLASER with {n} ranges needs {n + 9} values at least, got {len(parts)}")
+    values = _ranges(parts[2 : n + 2], "FLASER") + _numbers(parts[n + 2 : n + 8], "FLASER")
+    return values + _numbers([parts[n + 8]], "timestamp"), (n,)
+
+
+def _robotlaser(parts: list[str]) -> tuple[list[float], tuple]:
+    """A ROBOTLASER1 line's ranges, laser pose, robot pose and timestamp, and its beams: count,
+    first beam's angle (rad), angular resolution (rad) and maximum range (m)."""
+    start, _, resolution, max_range = _numbers(parts[2:6], "ROBOTLASER1")
+    n = _count(parts[8])
+    remissions = int(parts[9 + n])
+    poses = 10 + n + max(remissions, 0)
+    if remissions < 0 or len(parts) < poses + 12:
+        raise ValueError(f"ROBOTLASER1 with {n} ranges and {remissions} remissions needs {poses + 12} values")
+    values = _ranges(parts[9 : 9 + n], "ROBOTLASER1") + _numbers(parts[poses : poses + 6], "ROBOTLASER1")
+    return values + _numbers([parts[poses + 11]], "timestamp"), (n, start, resolution, max_range)
+
+
+#: The laser messages read, and how (FLASER first: where a log has both, ROBOTLASER1 repeats it).
+LASER_LINES = {"FLASER": _flaser, "ROBOTLASER1": _robotlaser}
+
+
 def read_carmen(path: str | Path) -> CarmenLog:
-    """Read the FLASER, ODOM and PARAM lines of a CARMEN log; errors name the file and the line."""
+    """Read the FLASER or ROBOTLASER1, ODOM and PARAM lines of a CARMEN log; errors name the file
+    and the line (a scan whose beams differ from the first scan's among them)."""
     path = Path(path)
-    scans, odometry, params, sequence = [], [], {}, []
+    scans: dict[str, list] = {kind: [] for kind in LASER_LINES}
+    beams: dict[str, tuple] = {}
+    odometry, params, order = [], {}, []
     ignored: Counter[str] = Counter()
-    width: int | None = None
     for number, line in enumerate(_lines(path), start=1):
         parts = line.split()
         if not parts:
             continue
         kind = parts[0]
         try:
-            if kind == "FLASER":
-                n = int(parts[1])
-                if not 2 <= n <= MAX_BEAMS:
-                    raise ValueError(f"{n} ranges: a front laser has 2 to {MAX_BEAMS}")
-                if len(parts) < n + 9:
-                    raise ValueError(f"FLASER with {n} ranges needs {n + 9} values at least, got {len(parts)}")
-                if width is not None and n != width:
-                    raise ValueError(f"FLASER has {n} ranges, earlier scans had {width}")
-                values = _numbers(parts[2 : n + 8], "FLASER")
-                if min(values[:n]) < 0 or max(values[:n]) > MAX_VALUE:
-                    raise ValueError("a range is negative or implausibly large")
-                width = n
-                scans.append(values + _numbers([parts[n + 8]], "timestamp"))
-                sequence.append(("scan", len(scans) - 1))
+            if kind in LASER_LINES:
+                values, shape = LASER_LINES[kind](parts)
+                first = beams.setdefault(kind, shape)
+                if shape[0] != first[0] or not np.allclose(shape, first, rtol=0, atol=1e-6):
+                    raise ValueError(f"its beams {shape} differ from the first {kind}'s {first} (count, angles, range)")
+                scans[kind].append(values)
+                order.append((kind, len(scans[kind]) - 1))
             elif kind == "ODOM":
                 odometry.append(_numbers(parts[1:4], "ODOM") + _numbers([parts[7]], "timestamp"))
-                sequence.append(("odom", len(odometry) - 1))
+                order.append(("odom", len(odometry) - 1))
             elif kind == "PARAM" and len(parts) >= 3:
                 params[parts[1]] = parts[2]
             else:
                 ignored[kind[:40]] += 1
         except (ValueError, IndexError) as error:
             raise LogFormatError(str(path), number, f"bad {kind[:40]} line: {error}") from error
-    if not scans:
-        raise LogFormatError(str(path), 1, "no FLASER (front laser) lines in this CARMEN log")
-    assert width is not None  # every FLASER line sets it, and there is one
-    table = np.array(scans)
+    chosen = next((kind for kind in LASER_LINES if scans[kind]), None)
+    if chosen is None:
+        raise LogFormatError(str(path), 1, "no FLASER or ROBOTLASER1 (laser scan) lines in this CARMEN log")
+    for kind in LASER_LINES:
+        if kind != chosen and scans[kind]:
+            ignored[kind] += len(scans[kind])
+    width = beams[chosen][0]
+    table = np.array(scans[chosen])
     odometry_table = np.array(odometry).reshape(-1, 4)
+    geometry, laser_max_range = None, None
+    if chosen == "ROBOTLASER1":
+        _, start, resolution, laser_max_range = beams[chosen]
+        geometry = BeamGeometry(first_beam_angle=start, direction=1, field_of_view=resolution * (width - 1))
     return CarmenLog(
         source=str(path),
         scan_times=table[:, -1],
@@ -140,14 +204,16 @@ def read_carmen(path: str | Path) -> CarmenLog:
         odometry_poses=odometry_table[:, :3],
         params=params,
         ignored=ignored,
-        sequence=sequence,
+        sequence=[("scan", i) if kind == chosen else (kind, i) for kind, i in order if kind in (chosen, "odom")],
+        geometry=geometry,
+        laser_max_range=laser_max_range,
     )
 
 
 def is_carmen(path: str | Path) -> bool:
-    """Whether a file looks like a CARMEN log (a FLASER, ODOM or PARAM line among its first 200)."""
+    """Whether a file looks like a CARMEN log (a laser, ODOM or PARAM line among its first 200)."""
     for line in _lines(Path(path))[:200]:
-        if line.split()[:1] in (["FLASER"], ["ODOM"], ["PARAM"]):
+        if line.split()[:1] in (["FLASER"], ["ROBOTLASER1"], ["ODOM"], ["PARAM"]):
             return True
     return False
 
@@ -217,7 +283,7 @@ def import_carmen(path: str | Path, out: str | Path) -> dict:
                 poses.append(carmen.scan_poses[index])
                 counts["scans"] += 1
     sidecars.write_truth(sidecars.truth_path(out), np.array(times), np.array(poses))
-    sensor = {"beams": carmen.n_beams, "max_range": max_range, **front_laser(carmen.n_beams).to_dict()}
+    sensor = {"beams": carmen.n_beams, "max_range": max_range, **carmen.beam_geometry.to_dict()}
     sidecars.write_map(
         sidecars.map_path(out),
         np.empty((0, 4)),
