@@ -4,9 +4,24 @@ from pathlib import Path
 
 import pytest
 
+from mazeslam.filters.fastslam import FastSLAMParams
+
 PROJECT_ROOT = Path(__file__).resolve().parents[1]
 SHARED_DATA = PROJECT_ROOT.parent / "shared" / "data"
 COURSE_LOG = SHARED_DATA / "course" / "log1.txt"
+#: FastSLAM without motion noise, one particle, the plain likelihood and no resampling: the filter's
+#: algebra on hand-made cases (sensor noise 1 cm and 0.01 rad; tests replace what they need).
+EXACT = FastSLAMParams(
+    NPARTICLES=1,
+    sigmaX=0,
+    sigmaTH=0,
+    sigmaTH_drive=0,
+    sigmaR=0.01,
+    sigmaB=0.01,
+    observation_scale=0.0,
+    resample_threshold=0,
+    inflation=1.0,
+)
 
 
 @pytest.fixture

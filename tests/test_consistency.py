@@ -1,27 +1,20 @@
 """The uncertainty a run states, and the statistics that judge it, against hand-computed cases."""
 
+import dataclasses
 import json
 import math
 
 import numpy as np
 import pytest
+from conftest import EXACT as NOISE_FREE
 
 from mazeslam import sidecars
 from mazeslam.evaluation.consistency import OBSERVATION_BOUND_95, POSE_BOUND_95, nees_summary, nis_summary
 from mazeslam.evaluation.metrics import normalized_estimation_error
 from mazeslam.filters.fastslam import FastSLAM, FastSLAMParams
 
-EXACT = FastSLAMParams(
-    NPARTICLES=1,
-    sigmaX=0,
-    sigmaTH=0,
-    sigmaTH_drive=0,
-    sigmaR=0.01,
-    sigmaB=0.02,
-    observation_scale=0.0,
-    resample_threshold=0,
-    inflation=1.0,
-)
+#: The noise-free filter with 0.02 rad of bearing noise.
+EXACT = dataclasses.replace(NOISE_FREE, sigmaB=0.02)
 
 
 def test_the_pose_covariance_is_the_weighted_covariance_of_the_cloud():

@@ -13,20 +13,11 @@ import math
 
 import numpy as np
 import pytest
+from conftest import EXACT
 
 from mazeslam.filters.fastslam import FastSLAM, FastSLAMParams
 
-PARAMS = FastSLAMParams(
-    NPARTICLES=2,
-    sigmaX=0,
-    sigmaTH=0,
-    sigmaTH_drive=0,
-    sigmaR=0.01,
-    sigmaB=0.01,
-    observation_scale=0.0,
-    resample_threshold=0,
-    seed=3,
-)
+PARAMS = dataclasses.replace(EXACT, NPARTICLES=2, seed=3)
 #: Particle poses (x, y, theta); the observation (range 1.02 m, bearing 0) puts the wall end 1 m
 #: straight ahead of each: at (1, 0) and at (2, 0).
 POSES = np.array([[0.0, 0.0, 0.0], [2.0, -1.0, math.pi / 2]])

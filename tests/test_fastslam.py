@@ -3,20 +3,9 @@ import math
 
 import numpy as np
 import pytest
+from conftest import EXACT
 
 from mazeslam.filters.fastslam import Candidates, FastSLAM, FastSLAMParams
-
-EXACT = FastSLAMParams(
-    NPARTICLES=1,
-    sigmaX=0,
-    sigmaTH=0,
-    sigmaTH_drive=0,
-    sigmaR=0.01,
-    sigmaB=0.01,
-    observation_scale=0.0,
-    resample_threshold=0,
-    inflation=1.0,
-)
 
 
 def observe(pose, landmark):
