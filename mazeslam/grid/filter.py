@@ -284,9 +284,18 @@ class GridSlam:
         """The best pose (3,) of the refinements seeded by ``predicted`` (3,) and by a correlative
         search around it over the particle's occupied cells, by likelihood times the prior
         ``N(predicted, covariance)`` (3, 3) that also sets the search's window."""
-        grid = LikelihoodGrid(field.occupied_points(), self.params.rescue)
-        seeds = np.vstack([predicted, correlative_candidates(grid, points, predicted, covariance, self.params.rescue)])
+        seeds = np.vstack([predicted, self._search(field, points, predicted, covariance)])
         return self._best_refinement(field, points, predicted, np.linalg.inv(covariance), seeds)
+
+    def _search(
+        self, field: LikelihoodField, points: np.ndarray, predicted: np.ndarray, covariance: np.ndarray
+    ) -> np.ndarray:
+        """The correlative search's best poses (C, 3) for ``points`` (N, 2) (robot frame) over
+        ``field``'s occupied cells, in the window and under the prior ``N(predicted, covariance)``."""
+        search = self.params.rescue
+        return correlative_candidates(
+            LikelihoodGrid(field.occupied_points(), search), points, predicted, covariance, search
+        )
 
     def _best_refinement(
         self,
@@ -320,10 +329,7 @@ class GridSlam:
         field = LikelihoodField(grid.window(*grid.tile_range(disc, self.params.window_margin)), self.params.match)
         if not field.has_occupied:
             return np.zeros((0, 3))
-        covariance, search = self.params.every_scan_covariance, self.params.rescue
-        candidates = correlative_candidates(
-            LikelihoodGrid(field.occupied_points(), search), points, predicted, covariance, search
-        )
+        candidates = self._search(field, points, predicted, self.params.every_scan_covariance)
         return relative(predicted, candidates).reshape(-1, 3)
 
     def _map_corrected_motion(self, motion: np.ndarray, points: np.ndarray) -> np.ndarray:
