@@ -6,13 +6,15 @@
    it needs two cores free of other work) and the CPU-time efficiency, one worker's CPU time over
    the two workers' (the sweep's process and its workers: user + system time, ``getrusage``), which
    measures the parallel overhead (process start-up, pickling, imports in each worker, work done
-   twice) whatever else the machine is running: 1.0 is none. ``--repeats N`` alternates the two N times.
+   twice) whatever else the machine is running: 1.0 is none. ``--repeats N`` alternates the two N times;
+   ``--runs N`` takes the first N runs instead (``--runs 270``: the whole grid, the issue's own measure,
+   about 4 and 2 minutes on two free cores).
 2. The whole grid (270 runs) on this machine's cores (target: under 15 minutes; ``--subset`` skips it,
    ``--grid`` runs only it).
 ``--tasks`` instead times each task of the subset in this process (CPU time; the simulations, the
 batch optima, the filter runs, in the sweep's order) and the makespan of two workers taking them in
 that order phase by phase: the speed-up the schedule allows on two free cores, whatever the load.
-Run: ``python benchmarks/bench_sweep.py [--subset | --grid | --tasks] [--repeats N]``.
+Run: ``python benchmarks/bench_sweep.py [--subset | --grid | --tasks] [--repeats N] [--runs N]``.
 """
 
 from __future__ import annotations
@@ -48,23 +50,23 @@ def _cpu_seconds() -> float:
     return own.ru_utime + own.ru_stime + children.ru_utime + children.ru_stime
 
 
-def measure(workers: int, out_dir: Path) -> dict:
-    """Run the subset on ``workers`` workers in this process: its wall-clock and CPU seconds."""
-    subset = _subset(load_sweep(GRID), SUBSET_RUNS)
+def measure(workers: int, out_dir: Path, runs: int = SUBSET_RUNS) -> dict:
+    """Run the first ``runs`` runs on ``workers`` workers in this process: wall-clock and CPU seconds."""
+    subset = _subset(load_sweep(GRID), runs)
     cpu, began = _cpu_seconds(), time.perf_counter()
     run_sweep(subset, out_dir, workers=workers, progress=False)
     return {"wall": time.perf_counter() - began, "cpu": _cpu_seconds() - cpu, "runs": len(subset.runs())}
 
 
-def schedule_bound(workers: int = 2) -> Iterator[dict]:
-    """Each task of the subset, in ``run_sweep``'s order and phases, timed in this process (CPU
+def schedule_bound(workers: int = 2, count: int = SUBSET_RUNS) -> Iterator[dict]:
+    """Each task of the first ``count`` runs, in ``run_sweep``'s order and phases, timed in this process (CPU
     seconds), and the makespan of ``workers`` workers each taking the next task when free (the
     pool's order): one row per phase, then the whole sweep's tasks over that makespan."""
     import scipy.optimize  # noqa: F401  (loaded before the tasks, as the sweep's process does before forking)
 
     from mazeslam.evaluation import sweep as sweeps
 
-    subset = _subset(load_sweep(GRID), SUBSET_RUNS)
+    subset = _subset(load_sweep(GRID), count)
     runs = sorted(subset.runs(), key=lambda run: -sweeps.configure(subset, run["settings"])[1].fastslam.NPARTICLES)
     total = makespan = 0.0
     with tempfile.TemporaryDirectory() as logs, tempfile.TemporaryDirectory() as maps:
@@ -88,21 +90,23 @@ def schedule_bound(workers: int = 2) -> Iterator[dict]:
                 "ratio": sum(seconds) / max(free),
             }
     yield {
-        "benchmark": f"{SUBSET_RUNS} runs: tasks' CPU time over the {workers}-worker makespan (speed-up bound)",
+        "benchmark": f"{len(runs)} runs: tasks' CPU time over the {workers}-worker makespan (speed-up bound)",
         "seconds": makespan,
         "baseline_s": total,
         "ratio": total / makespan,
     }
 
 
-def _measure_fresh(workers: int, out_dir: Path) -> dict:
+def _measure_fresh(workers: int, out_dir: Path, runs: int) -> dict:
     """``measure`` in a fresh interpreter."""
-    command = [sys.executable, __file__, "--measure", str(workers), str(out_dir)]
+    command = [sys.executable, __file__, "--measure", str(workers), str(out_dir), str(runs)]
     printed = subprocess.run(command, check=True, capture_output=True, text=True).stdout
     return json.loads(printed.splitlines()[-1])
 
 
-def run(subset_only: bool = False, repeats: int = 1, grid_only: bool = False) -> Iterator[dict]:
+def run(
+    subset_only: bool = False, repeats: int = 1, grid_only: bool = False, runs: int = SUBSET_RUNS
+) -> Iterator[dict]:
     """The rows, each yielded as soon as it is measured."""
     timings: dict[int, list[dict]] = {1: [], 2: []}
     loads = []
@@ -110,7 +114,7 @@ def run(subset_only: bool = False, repeats: int = 1, grid_only: bool = False) ->
         for repeat in range(0 if grid_only else repeats):
             for workers in (1, 2):
                 loads.append(os.getloadavg()[0])
-                timings[workers].append(_measure_fresh(workers, Path(folder) / f"subset{workers}-{repeat}"))
+                timings[workers].append(_measure_fresh(workers, Path(folder) / f"subset{workers}-{repeat}", runs))
         if not grid_only:
             yield from _subset_rows(timings, loads, repeats)
         if subset_only:
@@ -154,15 +158,16 @@ def _subset_rows(timings: dict[int, list[dict]], loads: list[float], repeats: in
 
 if __name__ == "__main__":
     if sys.argv[1:2] == ["--measure"]:
-        print(json.dumps(measure(int(sys.argv[2]), Path(sys.argv[3]))))
+        print(json.dumps(measure(int(sys.argv[2]), Path(sys.argv[3]), int(sys.argv[4]))))
         raise SystemExit(0)
     import pandas as pd
 
     repeats = int(sys.argv[sys.argv.index("--repeats") + 1]) if "--repeats" in sys.argv else 1
+    runs = int(sys.argv[sys.argv.index("--runs") + 1]) if "--runs" in sys.argv else SUBSET_RUNS
     rows = (
-        schedule_bound()
+        schedule_bound(count=runs)
         if "--tasks" in sys.argv
-        else run(subset_only="--subset" in sys.argv, repeats=repeats, grid_only="--grid" in sys.argv)
+        else run(subset_only="--subset" in sys.argv, repeats=repeats, grid_only="--grid" in sys.argv, runs=runs)
     )
     for row in rows:
         print(pd.DataFrame([row]).set_index("benchmark").to_markdown(floatfmt=".3g"), end="\n\n", flush=True)
