@@ -46,7 +46,13 @@ def aces_rows(folder: Path) -> list[dict]:
     import_carmen(CARMEN / "aces-corrected.log.gz", folder / "aces.log")
     run = load_run(folder / "aces.log")
     began = time.perf_counter()
-    run_grid_slam(run.log, run.geometry, run.start_pose, GridSlamParams(particles=PARTICLES))
+    run_grid_slam(
+        run.log,
+        run.geometry,
+        run.start_pose,
+        GridSlamParams(particles=PARTICLES),
+        sensor_max_range=run.sensor_max_range,
+    )
     factor = run.log.duration / (time.perf_counter() - began)
     peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
     return [

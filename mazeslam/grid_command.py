@@ -42,9 +42,11 @@ def grid_params(config: SlamConfig) -> GridSlamParams:
 
 def grid_on_run(run: LoadedRun, config: SlamConfig, progress: bool = False, snapshot_every: int = 0) -> GridSlamResult:
     """The grid filter over ``run``, moving by its odometry with the glitch pairs summed and lone
-    glitches left out (``[odometry] jump_tolerance``); ``snapshot_every``: see ``run_grid_slam``."""
+    glitches left out (``[odometry] jump_tolerance``), the sensor's maximum range from the map
+    sidecar (``[grid.grid] clear_no_return``); ``snapshot_every``: see ``run_grid_slam``."""
     moved_by = run.log_with_glitch_pairs_summed(config.odometry.jump_tolerance)
-    return run_grid_slam(moved_by, run.geometry, run.start_pose, grid_params(config), progress, snapshot_every)
+    params = grid_params(config)
+    return run_grid_slam(moved_by, run.geometry, run.start_pose, params, progress, snapshot_every, run.sensor_max_range)
 
 
 def run_grid_command(

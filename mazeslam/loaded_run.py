@@ -62,6 +62,13 @@ class LoadedRun:
         return self.world["walls"] if self.world is not None else None
 
     @property
+    def sensor_max_range(self) -> float:
+        """The sensor's maximum range from the map sidecar (m; a beam with no return saw nothing
+        nearer), or 0 when it is not recorded."""
+        sensor = (self.world or {}).get("sensor") or {}
+        return float(sensor.get("max_range") or 0.0)
+
+    @property
     def truth_label(self) -> str:
         """How figures and tables name the truth: a reference (CARMEN's corrected poses) is not truth."""
         return (self.world or {}).get("truth_kind", "ground truth")

@@ -8,7 +8,8 @@ from mazeslam import sidecars
 from mazeslam.config import load_toml
 from mazeslam.filters.corners import CornerExtractor, CornerParams
 from mazeslam.imports.carmen import front_laser, import_carmen, is_carmen, read_carmen
-from mazeslam.log import LogFormatError
+from mazeslam.loaded_run import load_run
+from mazeslam.log import LogFormatError, read
 
 CARMEN = SHARED_DATA / "carmen"
 LOGS = ["aces", "csail", "edmonton", "fhw", "freiburg-079", "freiburg-101", "orebro", "seattle"]
@@ -36,6 +37,19 @@ def test_read_hand_written_log(tmp_path):
     np.testing.assert_allclose(log.odometry_poses[:, 2], [0.0, 0.05])
     assert log.max_range == 50.0
     assert log.ignored["NEFF"] == 1 and log.ignored["#"] == 1
+
+
+def test_a_stated_maximum_range_the_readings_pass_gives_way_to_the_largest_reading(tmp_path):
+    path = tmp_path / "short.log"
+    path.write_text(SAMPLE.replace("robot_front_laser_max 50", "robot_front_laser_max 2.5"))
+    assert read_carmen(path).max_range == 3.5  # the readings reach 3.5 m: 2.5 m is not the laser's limit
+    import_carmen(path, tmp_path / "short_course.log")
+    sensor = sidecars.read_map(sidecars.map_path(tmp_path / "short_course.log"))["sensor"]
+    assert sensor["max_range"] == 3.5
+    np.testing.assert_allclose(read(tmp_path / "short_course.log").scans, [[1, 2, 3, 2, 1], [1.5, 2.5, 0, 2.5, 1.5]])
+    assert load_run(tmp_path / "short_course.log").sensor_max_range == 3.5  # what the grid filter clears to
+    (tmp_path / "short_course.map.json").unlink()
+    assert load_run(tmp_path / "short_course.log").sensor_max_range == 0.0  # unknown without the sidecar
 
 
 @pytest.mark.parametrize("beams, last_degrees", [(180, 89.0), (181, 90.0), (360, 89.5), (361, 90.0)])

@@ -39,6 +39,27 @@ def test_a_beam_clears_the_cells_it_crosses_and_marks_its_end():
     assert cell_value(grid, 0.01, 5.02) == 0.0  # ... and nothing beyond, nothing occupied
 
 
+def test_a_beam_with_no_return_clears_up_to_the_sensors_maximum_range_only_when_it_is_known():
+    params = GridParams(max_range=5.0, min_range=0.5)
+    bearings = np.array([0.0, np.pi / 2, np.pi])
+    ranges = np.array([0.0, 0.0, 0.3])  # two beams with no return, one return nearer than min_range
+    unknown = scan_rays(ranges, bearings, MOUNT, params)
+    assert len(unknown.free) == len(unknown.hits) == len(unknown.reach) == 0
+    short = scan_rays(ranges, bearings, MOUNT, params, sensor_max_range=3.0)  # nothing within 3 m
+    assert len(short.hits) == 0
+    np.testing.assert_allclose(short.reach, [[3.0, 0.0], [0.0, 3.0]], atol=1e-12)  # the near return stays out
+    assert np.hypot(*short.free.T).max() <= 3.0 and np.hypot(*short.free.T).max() > 3.0 - 0.04
+    long = scan_rays(ranges, bearings, MOUNT, params, sensor_max_range=80.0)  # cut at the grid's 5 m
+    np.testing.assert_allclose(long.reach, [[5.0, 0.0], [0.0, 5.0]], atol=1e-12)
+    grid = TiledGrid(params)
+    window = grid.window(*grid.tile_range(np.vstack([long.reach, np.zeros(2)]), 1.0))
+    grid.store(window, integrate_scan(window, long, np.zeros(3), params))
+    assert cell_value(grid, 4.5, 0.01) == pytest.approx(params.miss)
+    assert cell_value(grid, 0.01, 4.9) == pytest.approx(params.miss)
+    assert cell_value(grid, 5.1, 0.01) == 0.0 and cell_value(grid, -0.2, 0.01) == 0.0
+    assert max(tile.max() for tile in grid.tiles.values()) <= 0.0  # nothing marked occupied
+
+
 def test_a_copy_shares_every_tile_and_a_write_replaces_only_the_tiles_it_changes():
     grid = TiledGrid(GridParams())
     insert(grid, np.full(181, 8.0), np.array([1.6, 1.6, 0.0]))  # tiles are 3.2 m: x tiles 0 to 3
@@ -85,3 +106,21 @@ def test_the_matcher_recovers_a_displaced_pose_against_a_map():
     assert np.hypot(*(found[:2] - truth[:2])) < 0.03
     assert abs(found[2] - truth[2]) < 0.01
     assert field.overlap(found, points, params) > 0.9
+
+
+@pytest.mark.parametrize(
+    ("clear", "sensor_range", "clears"), [(True, 3.0, True), (True, 0.0, False), (False, 3.0, False)]
+)
+def test_the_filter_clears_along_beams_with_no_return_when_asked_and_the_sensors_range_is_known(
+    clear, sensor_range, clears
+):
+    bearings, nothing = np.radians([-20.0, 0.0, 20.0]), np.zeros(3)
+    params = GridSlamParams(particles=2, grid=GridParams(clear_no_return=clear))
+    slam = GridSlam(params, np.zeros(3), ScanSensor(bearings, MOUNT, max_range=sensor_range))
+    slam.process(nothing, np.zeros(3))
+    grid = slam.maps[0]
+    if not clears:
+        assert not grid.tiles
+        return
+    assert cell_value(grid, 2.9, 0.01) == pytest.approx(grid.params.miss)  # nothing within 3 m ahead
+    assert cell_value(grid, 3.1, 0.01) == 0.0  # and nothing said beyond

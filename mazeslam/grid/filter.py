@@ -167,14 +167,17 @@ STENCIL = np.array(list(itertools.product((-1.0, 0.0, 1.0), repeat=3)))
 
 @dataclass(frozen=True)
 class ScanSensor:
-    """How a log's scans are turned into points: bearings (N,) rad and sensor mount (2,), robot frame."""
+    """How a log's scans are turned into points: bearings (N,) rad and sensor mount (2,), robot
+    frame; max_range, the sensor's maximum range (m, 0 unknown), how far a beam with no return
+    clears the map (``GridParams.clear_no_return``, ``scan_rays``)."""
 
     bearings: np.ndarray
     mount: np.ndarray
+    max_range: float = 0.0
 
     @classmethod
-    def of(cls, geometry: BeamGeometry, beams: int) -> ScanSensor:
-        return cls(geometry.bearings(beams), np.array([geometry.mount_x, geometry.mount_y]))
+    def of(cls, geometry: BeamGeometry, beams: int, max_range: float = 0.0) -> ScanSensor:
+        return cls(geometry.bearings(beams), np.array([geometry.mount_x, geometry.mount_y]), max_range)
 
 
 class GridSlam:
@@ -209,7 +212,8 @@ class GridSlam:
         the improved proposal, weigh it, add the scan (``ranges`` (N,) m) to its map and resample
         if needed. Returns the share of particles whose match was accepted, the effective sample
         size before resampling and the resampling's indexes (None without resampling)."""
-        rays = scan_rays(ranges, self.sensor.bearings, self.sensor.mount, self.params.grid)
+        clears_to = self.sensor.max_range if self.params.grid.clear_no_return else 0.0
+        rays = scan_rays(ranges, self.sensor.bearings, self.sensor.mount, self.params.grid, clears_to)
         trusted = np.where(ranges >= self.params.grid.min_range, ranges, 0.0)
         points = match_points(trusted, self.sensor.bearings, self.sensor.mount, self.params.match)
         if self.params.map_corrected_motion:
@@ -490,17 +494,21 @@ def run_grid_slam(
     params: GridSlamParams | None = None,
     progress: bool = False,
     snapshot_every: int = 0,
+    sensor_max_range: float = 0.0,
 ) -> GridSlamResult:
     """The grid filter over every scan of ``course_log`` (see the module docstring). With
     ``snapshot_every`` > 0, every that many scans (and at the last) the best particle's map and the
-    particles are kept for ``--animate`` (``GridSlamResult.snapshots``)."""
+    particles are kept for ``--animate`` (``GridSlamResult.snapshots``). ``sensor_max_range``: the
+    laser's maximum range (m), up to which a beam with no return clears the map with
+    ``params.grid.clear_no_return`` (0: unknown, such beams are left out)."""
     params = params or GridSlamParams()
     began = time.perf_counter()
     motions = scan_motions(course_log, geometry, params, start_pose)
     motion_seconds = time.perf_counter() - began
     records = np.flatnonzero(course_log.is_scan)
     count, particles = len(records), params.particles
-    slam = GridSlam(params, start_pose, ScanSensor.of(geometry, course_log.width), bool(course_log.is_odometry.any()))
+    sensor = ScanSensor.of(geometry, course_log.width, sensor_max_range)
+    slam = GridSlam(params, start_pose, sensor, bool(course_log.is_odometry.any()))
     node_poses, node_parents = np.empty((count, particles, 3)), np.empty((count, particles), dtype=int)
     mean_poses, covariances = np.empty((count, 3)), np.empty((count, 3, 3))
     processed, resampled = np.zeros(count, bool), np.zeros(count, bool)

@@ -15,6 +15,7 @@ unknown, positive occupied, negative free.
 
 from __future__ import annotations
 
+import itertools
 from dataclasses import dataclass
 
 import numpy as np
@@ -37,9 +38,14 @@ class GridParams:
         clamp: log-odds stay within [-clamp, clamp], so that a map can change its mind.
         min_range: returns nearer than this are left out as no return, m (a sensor's untrusted
             near span: the course robot's camera trusts 0.05-0.4 m).
-        max_range: beams update the map up to this range, m; a longer beam (or a max-range return)
-            clears the cells up to it and marks nothing occupied.
+        max_range: beams update the map up to this range, m; a longer beam clears the cells up to
+            it and marks nothing occupied.
         trace_step: distance between the samples along a beam that mark cells free, in cells.
+        clear_no_return: a beam with no return (range 0) clears the cells up to the sensor's
+            maximum range (at most ``max_range``; ``scan_rays``), where the sensor's range is known.
+            Right for a laser that reads nothing only when nothing is in range (a SICK: the CARMEN
+            import writes its out-of-range readings as 0); wrong for the course robot's camera,
+            whose 0 also means a wall nearer than its blind disc or a missed wall, so off by default.
     """
 
     resolution: float = 0.05
@@ -50,6 +56,7 @@ class GridParams:
     min_range: float = 0.0
     max_range: float = 20.0
     trace_step: float = 0.8
+    clear_no_return: bool = False
 
     def __post_init__(self):
         require(self.resolution > 0 and self.max_range > 0, "resolution and max_range must be positive (m)")
@@ -89,8 +96,9 @@ class TiledGrid:
         """The cells of tiles ``lower`` .. ``upper`` (exclusive) as one dense array to read and edit."""
         size = self.params.tile_size
         values = np.zeros(((upper[0] - lower[0]) * size, (upper[1] - lower[1]) * size), dtype=np.float32)
-        for (a, b), tile in self.tiles.items():
-            if lower[0] <= a < upper[0] and lower[1] <= b < upper[1]:
+        for a, b in itertools.product(range(lower[0], upper[0]), range(lower[1], upper[1])):  # the window's tiles,
+            tile = self.tiles.get((a, b))  # not the whole map's: the cost stays flat as the map grows
+            if tile is not None:
                 i, j = (a - lower[0]) * size, (b - lower[1]) * size
                 values[i : i + size, j : j + size] = tile
         return Window(values, lower * self.tile_metres, self.params.resolution, lower)
@@ -159,7 +167,8 @@ class ScanRays:
     Attributes:
         free: (F, 2) samples along the beams, from the sensor to just before each end, m.
         hits: (H, 2) the ends of the beams that returned within ``max_range``, m.
-        reach: (B, 2) the farthest point each beam updates (its end or its cut at ``max_range``).
+        reach: (B, 2) the farthest point each beam updates (its end, or its cut at ``max_range`` or
+            at the sensor's maximum range for a beam with no return).
     """
 
     free: np.ndarray
@@ -167,20 +176,31 @@ class ScanRays:
     reach: np.ndarray
 
 
-def scan_rays(ranges: np.ndarray, bearings: np.ndarray, mount: np.ndarray, params: GridParams) -> ScanRays:
-    """The samples of a scan: ``ranges`` (N,) m (0 = no return, left out), ``bearings`` (N,) rad in
-    the robot frame, the sensor at ``mount`` (2,) in the robot frame."""
-    valid = (ranges > 0) & (ranges >= params.min_range)
-    ranges, bearings = ranges[valid], bearings[valid]
-    hit = ranges <= params.max_range
-    length = np.minimum(ranges, params.max_range) - np.where(hit, 0.5 * params.resolution, 0.0)
+def scan_rays(
+    ranges: np.ndarray, bearings: np.ndarray, mount: np.ndarray, params: GridParams, sensor_max_range: float = 0.0
+) -> ScanRays:
+    """The samples of a scan: ``ranges`` (N,) m, ``bearings`` (N,) rad in the robot frame, the
+    sensor at ``mount`` (2,) in the robot frame.
+
+    A beam with no return (range 0) saw nothing nearer than the sensor's maximum range: with
+    ``sensor_max_range`` (m, > 0) known it clears the cells up to that range (at most
+    ``params.max_range``) and marks none occupied, as a return beyond ``params.max_range`` does
+    (gmapping's maxUrange); with 0 (unknown) it is left out. Returns nearer than
+    ``params.min_range`` are always left out."""
+    returned = (ranges > 0) & (ranges >= params.min_range)
+    empty = (ranges == 0) & (sensor_max_range > 0)
+    keep = returned | empty
+    ranges, bearings, empty = ranges[keep], bearings[keep], empty[keep]
+    hit = ~empty & (ranges <= params.max_range)
+    reached = np.where(empty, min(sensor_max_range, params.max_range), np.minimum(ranges, params.max_range))
+    length = reached - np.where(hit, 0.5 * params.resolution, 0.0)
     step = params.trace_step * params.resolution
     counts = np.maximum(np.ceil(length / step).astype(int), 0)
     beam = np.repeat(np.arange(len(ranges)), counts)
     distance = (np.arange(counts.sum()) - np.repeat(np.cumsum(counts) - counts, counts)) * step
     directions = np.column_stack([np.cos(bearings), np.sin(bearings)])
     free = mount + distance[:, None] * directions[beam]
-    reach = mount + np.minimum(ranges, params.max_range)[:, None] * directions
+    reach = mount + reached[:, None] * directions
     return ScanRays(free, reach[hit], reach)
 
 

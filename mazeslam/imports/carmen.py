@@ -78,13 +78,17 @@ class CarmenLog:
     @property
     def max_range(self) -> float:
         """The laser's maximum range (m): the ``robot_front_laser_max`` PARAM, else ROBOTLASER1's
-        maximum range, else the largest reading."""
+        maximum range, unless the scans read farther (then, as without either, the largest
+        reading, the value the laser reports when nothing returns). A PARAM the readings pass is
+        the robot software's range, not the laser's: edmonton's says 10 m, and its scans read
+        walls up to 51 m away."""
         value = self.params.get("robot_front_laser_max", self.laser_max_range)
         try:
             limit = float(value) if value is not None else math.nan
         except ValueError:
             limit = math.nan
-        return limit if 0 < limit <= MAX_VALUE else float(self.ranges.max())
+        largest = float(self.ranges.max())
+        return limit if 0 < limit <= MAX_VALUE and largest <= limit else largest
 
 
 def front_laser(n_beams: int) -> BeamGeometry:
