@@ -7,8 +7,8 @@
    the two workers' (the sweep's process and its workers: user + system time, ``getrusage``), which
    measures the parallel overhead (process start-up, pickling, imports in each worker, work done
    twice) whatever else the machine is running: 1.0 is none. ``--repeats N`` alternates the two N times;
-   ``--runs N`` takes the first N runs instead (``--runs 270``: the whole grid, the issue's own measure,
-   about 4 and 2 minutes on two free cores).
+   ``--runs N`` takes the first N runs instead, rounded to whole seeds (27 runs a seed; ``--runs 270``:
+   the whole grid, the issue's own measure, about 4 and 2 minutes on two free cores).
 2. The whole grid (270 runs) on this machine's cores (target: under 15 minutes; ``--subset`` skips it,
    ``--grid`` runs only it).
 ``--tasks`` instead times each task of the subset in this process (CPU time; the simulations, the
@@ -51,7 +51,8 @@ def _cpu_seconds() -> float:
 
 
 def measure(workers: int, out_dir: Path, runs: int = SUBSET_RUNS) -> dict:
-    """Run the first ``runs`` runs on ``workers`` workers in this process: wall-clock and CPU seconds."""
+    """Run the first ``runs`` runs (whole seeds, ``_subset``) on ``workers`` workers in this process:
+    wall-clock and CPU seconds."""
     subset = _subset(load_sweep(GRID), runs)
     cpu, began = _cpu_seconds(), time.perf_counter()
     run_sweep(subset, out_dir, workers=workers, progress=False)

@@ -1,11 +1,12 @@
 import gzip
+import json
 
 import numpy as np
 import pytest
 from conftest import PROJECT_ROOT, SHARED_DATA
 
 from mazeslam import sidecars
-from mazeslam.config import load_toml
+from mazeslam.config import InputError, load_toml
 from mazeslam.filters.corners import CornerExtractor, CornerParams
 from mazeslam.imports.carmen import front_laser, import_carmen, is_carmen, read_carmen
 from mazeslam.loaded_run import load_run
@@ -39,6 +40,21 @@ def test_read_hand_written_log(tmp_path):
     assert log.ignored["NEFF"] == 1 and log.ignored["#"] == 1
 
 
+def test_a_stated_maximum_range_passed_by_a_stray_reading_stands(tmp_path):
+    scans = np.full((6, 181), 2.0)
+    scans[3, 90] = 3.0  # one reading in 1086 beyond the PARAM's 2.5 m
+    lines = [f"FLASER 181 {' '.join(map(str, scan))} 0 0 0 0 0 0 {k}.5 h {k}.5" for k, scan in enumerate(scans)]
+    path = tmp_path / "stray.log"
+    path.write_text("PARAM robot_front_laser_max 2.5 h 0\n" + "\n".join(lines) + "\n")
+    assert read_carmen(path).max_range == 2.5
+
+
+def test_a_passed_param_gives_way_to_the_robotlaser_maximum_range_before_the_largest_reading(tmp_path):
+    path = tmp_path / "new.log"
+    path.write_text("PARAM robot_front_laser_max 2.5 h 0\n" + ROBOTLASER_SAMPLE + "\n")
+    assert read_carmen(path).max_range == 30.0  # the readings reach 3.5 m, within ROBOTLASER1's 30 m
+
+
 def test_a_stated_maximum_range_the_readings_pass_gives_way_to_the_largest_reading(tmp_path):
     path = tmp_path / "short.log"
     path.write_text(SAMPLE.replace("robot_front_laser_max 50", "robot_front_laser_max 2.5"))
@@ -48,7 +64,13 @@ def test_a_stated_maximum_range_the_readings_pass_gives_way_to_the_largest_readi
     assert sensor["max_range"] == 3.5
     np.testing.assert_allclose(read(tmp_path / "short_course.log").scans, [[1, 2, 3, 2, 1], [1.5, 2.5, 0, 2.5, 1.5]])
     assert load_run(tmp_path / "short_course.log").sensor_max_range == 3.5  # what the grid filter clears to
-    (tmp_path / "short_course.map.json").unlink()
+    sidecar = tmp_path / "short_course.map.json"
+    document = json.loads(sidecar.read_text())
+    for bad in ("20", -1.0, [3.0]):
+        sidecar.write_text(json.dumps({**document, "sensor": {**document["sensor"], "max_range": bad}}))
+        with pytest.raises(InputError, match=r"short_course.map.json: sensor max_range must be a number >= 0"):
+            _ = load_run(tmp_path / "short_course.log").sensor_max_range
+    sidecar.unlink()
     assert load_run(tmp_path / "short_course.log").sensor_max_range == 0.0  # unknown without the sidecar
 
 

@@ -24,9 +24,11 @@ def insert(grid: TiledGrid, ranges: np.ndarray, pose: np.ndarray, bearings=BEARI
 
 
 def cell_value(grid: TiledGrid, x: float, y: float) -> float:
+    """The log-odds of the cell at world (x, y), m: 0 (unknown) outside every tile."""
     values, origin = grid.dense()
     i, j = np.floor((np.array([x, y]) - origin) / grid.params.resolution).astype(int)
-    return float(values[i, j])
+    inside = 0 <= i < values.shape[0] and 0 <= j < values.shape[1]
+    return float(values[i, j]) if inside else 0.0
 
 
 def test_a_beam_clears_the_cells_it_crosses_and_marks_its_end():
@@ -39,6 +41,17 @@ def test_a_beam_clears_the_cells_it_crosses_and_marks_its_end():
     assert cell_value(grid, 0.01, 5.02) == 0.0  # ... and nothing beyond, nothing occupied
 
 
+def test_a_scans_beams_by_hand_no_return_near_return_hit_and_beyond_the_range():
+    params = GridParams(max_range=5.0, min_range=0.5, resolution=0.1, trace_step=1.0)
+    bearings = np.array([0.0, np.pi / 2, np.pi, -np.pi / 2])
+    rays = scan_rays(np.array([0.0, 0.3, 2.0, 7.0]), bearings, MOUNT, params)  # the sensor's range unknown
+    np.testing.assert_allclose(rays.hits, [[-2.0, 0.0]], atol=1e-12)  # only the 2 m return ends in a hit
+    np.testing.assert_allclose(rays.reach, [[-2.0, 0.0], [0.0, -5.0]], atol=1e-12)  # the 7 m beam cut at 5 m
+    behind = rays.free[rays.free[:, 0] < -1e-9]  # samples along the 2 m beam, 0.1 m apart, before its end cell
+    np.testing.assert_allclose(np.sort(-behind[:, 0]), np.arange(1, 20) * 0.1, atol=1e-9)
+    assert len(rays.free) == 20 + 50  # with the sensor's own sample: 2 m less half a cell, and 5 m, in 0.1 m steps
+
+
 def test_a_beam_with_no_return_clears_up_to_the_sensors_maximum_range_only_when_it_is_known():
     params = GridParams(max_range=5.0, min_range=0.5)
     bearings = np.array([0.0, np.pi / 2, np.pi])
@@ -48,7 +61,7 @@ def test_a_beam_with_no_return_clears_up_to_the_sensors_maximum_range_only_when_
     short = scan_rays(ranges, bearings, MOUNT, params, sensor_max_range=3.0)  # nothing within 3 m
     assert len(short.hits) == 0
     np.testing.assert_allclose(short.reach, [[3.0, 0.0], [0.0, 3.0]], atol=1e-12)  # the near return stays out
-    assert np.hypot(*short.free.T).max() <= 3.0 and np.hypot(*short.free.T).max() > 3.0 - 0.04
+    assert 2.9 < np.hypot(*short.free.T).max() <= 3.0
     long = scan_rays(ranges, bearings, MOUNT, params, sensor_max_range=80.0)  # cut at the grid's 5 m
     np.testing.assert_allclose(long.reach, [[5.0, 0.0], [0.0, 5.0]], atol=1e-12)
     grid = TiledGrid(params)

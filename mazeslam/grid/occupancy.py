@@ -42,10 +42,11 @@ class GridParams:
             it and marks nothing occupied.
         trace_step: distance between the samples along a beam that mark cells free, in cells.
         clear_no_return: a beam with no return (range 0) clears the cells up to the sensor's
-            maximum range (at most ``max_range``; ``scan_rays``), where the sensor's range is known.
-            Right for a laser that reads nothing only when nothing is in range (a SICK: the CARMEN
-            import writes its out-of-range readings as 0); wrong for the course robot's camera,
-            whose 0 also means a wall nearer than its blind disc or a missed wall, so off by default.
+            maximum range (at most ``max_range``; ``scan_rays``), where the sensor's range is known,
+            as gmapping's maxUrange does. Off by default and in configs/carmen.toml: indoors a SICK also
+            reads nothing from glass or a dark surface within range (on the CARMEN logs it made no
+            log better and left 3 of 10 orebro seeds above 1 m: docs/grid.md, step 4), and the course
+            robot's camera reads 0 for a wall inside its blind disc or one it missed.
     """
 
     resolution: float = 0.05

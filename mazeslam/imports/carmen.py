@@ -77,18 +77,25 @@ class CarmenLog:
 
     @property
     def max_range(self) -> float:
-        """The laser's maximum range (m): the ``robot_front_laser_max`` PARAM, else ROBOTLASER1's
-        maximum range, unless the scans read farther (then, as without either, the largest
-        reading, the value the laser reports when nothing returns). A PARAM the readings pass is
-        the robot software's range, not the laser's: edmonton's says 10 m, and its scans read
-        walls up to 51 m away."""
-        value = self.params.get("robot_front_laser_max", self.laser_max_range)
-        try:
-            limit = float(value) if value is not None else math.nan
-        except ValueError:
-            limit = math.nan
-        largest = float(self.ranges.max())
-        return limit if 0 < limit <= MAX_VALUE and largest <= limit else largest
+        """The laser's maximum range (m), where a reading means no return: the first of the
+        ``robot_front_laser_max`` PARAM and ROBOTLASER1's maximum range that at most
+        ``STRAY_SHARE`` of the readings pass, else the largest reading (what a SICK reports for
+        nothing). A stated range more readings pass is not the laser's: edmonton's PARAM says
+        10 m while its scans read walls to 51 m (its laser reports nothing as 51.09-51.16 m; the
+        readings below the largest stay returns, farther than any range the filters use)."""
+        for value in (self.params.get("robot_front_laser_max"), self.laser_max_range):
+            try:
+                limit = float(value) if value is not None else math.nan
+            except ValueError:
+                continue
+            if 0 < limit <= MAX_VALUE and np.mean(self.ranges > limit) <= STRAY_SHARE:
+                return limit
+        return float(self.ranges.max())
+
+
+#: The share of readings that may pass a log's stated maximum range, as strays, before it is not
+#: taken as the laser's (``CarmenLog.max_range``).
+STRAY_SHARE = 0.001
 
 
 def front_laser(n_beams: int) -> BeamGeometry:
