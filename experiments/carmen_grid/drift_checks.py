@@ -16,7 +16,9 @@ other: the part of the error that changes from run to run) beside their ATE agai
 (what they share is either the filter's bias or the reference's own error). Per log, the laser
 odometry (configs/carmen.toml's ``[scan_matching]``) against the reference:
 its path length over the reference's, and the median over the accepted intervals longer than
-0.2 m of its error along the reference's motion as a share of the distance (positive: longer).
+0.2 m of its error along the reference's motion as a share of the distance (positive: longer). Per
+log, the laser's maximum range and the share of its beams with no return within it (the importer
+writes them as 0; the grid filter clears the map along them up to that range).
 
 Run: ``python experiments/carmen_grid/drift_checks.py`` after run.py (a few CPU minutes: the
 laser odometry of every log); writes ``results/drift_checks.md``.
@@ -115,9 +117,12 @@ def main() -> None:
         used = odometry.accepted[1:] & (truth_length > 0.2)
         along = np.einsum("ij,ij->i", steps[used, :2], truth_steps[used, :2]) / truth_length[used]
         apart = [similarity_fit(one, other)[0] for one, other in itertools.combinations(paths, 2)] or [np.nan]
+        beams = run.log.values[records, : run.log.width]
         logs.append(
             {
                 "log": name,
+                "laser max range [m]": run.sensor_max_range,
+                "beams with no return [%]": 100 * float(np.mean(beams == 0)),
                 "seeds apart: median [m]": np.median(apart),
                 "seeds apart: largest [m]": np.max(apart),
                 "laser odometry / reference length": length.sum() / truth_length.sum(),
@@ -143,6 +148,7 @@ def main() -> None:
         "more than 0.3 m or 0.1 rad off the reference's in one seed (per seed: which, numbered as orebro_checks' "
         "intervals, where at most 15); the rigid ATE between every two seeds' "
         "paths (median and largest: how far the runs are apart, against their ATE to the reference); "
+        "the laser's maximum range and the share of its beams with no return within it; "
         "the laser odometry's path length over the reference's and its median error along the reference's "
         "motion as a share of the distance over the accepted intervals.\n\n"
         + summary.to_markdown(floatfmt=".4g")

@@ -45,7 +45,7 @@ class GridParams:
             maximum range (at most ``max_range``; ``scan_rays``), where the sensor's range is known,
             as gmapping's maxUrange does. Off by default and in configs/carmen.toml: indoors a SICK also
             reads nothing from glass or a dark surface within range (on the CARMEN logs it made no
-            log better and left 3 of 10 orebro seeds above 1 m: docs/grid.md, step 4), and the course
+            log clearly better and left 3 of 10 orebro seeds above 1 m: docs/grid.md, step 4), and the course
             robot's camera reads 0 for a wall inside its blind disc or one it missed.
     """
 
