@@ -9,7 +9,6 @@ downstream opens a sidecar again.
 from __future__ import annotations
 
 import dataclasses
-import math
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -17,7 +16,6 @@ import numpy as np
 
 from mazeslam import log, sidecars
 from mazeslam.beams import EXERCISE_CONVENTION, BeamGeometry, SensorOverrides
-from mazeslam.config import InputError
 from mazeslam.log import CourseLog
 
 
@@ -66,16 +64,8 @@ class LoadedRun:
     @property
     def sensor_max_range(self) -> float:
         """The sensor's maximum range from the map sidecar (m; a beam with no return saw nothing
-        nearer), or 0 when it is not recorded. A value that is not a finite number >= 0 is an
-        ``InputError`` naming the sidecar."""
-        value = ((self.world or {}).get("sensor") or {}).get("max_range")
-        if value is None:
-            return 0.0
-        if isinstance(value, bool) or not isinstance(value, (int, float)) or not 0 <= value < math.inf:
-            raise InputError(
-                f"{sidecars.map_path(self.path)}: sensor max_range must be a number >= 0 (m), got {value!r}"
-            )
-        return float(value)
+        nearer, ``sidecars.read_map`` checks it), or 0 when it is not recorded."""
+        return float(((self.world or {}).get("sensor") or {}).get("max_range") or 0.0)
 
     @property
     def truth_label(self) -> str:

@@ -16,13 +16,14 @@ radians in (-pi, pi].
 from __future__ import annotations
 
 import json
+import math
 import re
 from pathlib import Path
 
 import numpy as np
 
 from mazeslam.beams import BeamGeometry
-from mazeslam.config import jsonable, read_text
+from mazeslam.config import InputError, jsonable, read_text
 
 TRUTH_HEADER = "t,x,y,theta"
 MAP_FORMAT = "mazeslam-map"
@@ -174,8 +175,14 @@ def read_map(path: str | Path) -> dict:
             raise ValueError(f"{path}: {key} must be a list of [{width} numbers]") from None
         if not np.all(np.isfinite(document[key])):
             raise ValueError(f"{path}: {key} holds a number that is not finite")
-    if document["sensor"] is not None and not isinstance(document["sensor"], dict):
+    sensor = document["sensor"]
+    if sensor is not None and not isinstance(sensor, dict):
         raise ValueError(f"{path}: sensor must be an object (or null)")
+    max_range = (sensor or {}).get("max_range")
+    if max_range is not None and (
+        isinstance(max_range, bool) or not isinstance(max_range, (int, float)) or not 0 <= max_range < math.inf
+    ):
+        raise InputError(f"{path}: sensor max_range must be a number >= 0 (m), got {max_range!r}")
     return document
 
 
