@@ -16,7 +16,7 @@ from pathlib import Path
 
 from mazeslam import sidecars
 from mazeslam.config import jsonable
-from mazeslam.evaluation.consistency import POSE_BOUND_95, nees_summary
+from mazeslam.evaluation.consistency import POSE_BOUND_95, nees_summary, summarise
 from mazeslam.evaluation.metrics import normalized_estimation_error
 from mazeslam.evaluation.scoring import DEAD_RECKONING, error_table
 from mazeslam.evaluation.sharpness import dead_reckoning_without_glitches, paths_sharpness, sharpness_lines
@@ -117,6 +117,9 @@ def run_grid_command(
         "peak_map_bytes": result.peak_map_bytes,
         "occupancy": paths["occupancy"].name,
     }
+    nis = summarise(result.nis, POSE_BOUND_95)
+    lines.append(_motion_nis_line(nis))
+    document["motion_nis"] = nis
     span = params.grid.min_range, params.grid.max_range
     sharpness = paths_sharpness(run, {"mean path": mean, "best particle": best}, config.odometry.jump_tolerance, *span)
     lines += sharpness_lines(sharpness, *span)
@@ -138,6 +141,17 @@ def run_grid_command(
         lines.append("no ground truth beside the log: no errors to report")
     paths["map"].write_text(json.dumps(jsonable(document), indent=1, allow_nan=False) + "\n")
     return lines + ["wrote " + ", ".join(str(p) for p in paths.values())]
+
+
+def _motion_nis_line(nis: dict) -> str:
+    """The motion NIS (``mazeslam.grid.filter.motion_nis``, summarised) in words."""
+    if not nis["count"]:
+        return "Uncertainty: no motion NIS (no scan was matched)"
+    return (
+        f"Uncertainty: motion NIS of {nis['count']} matched scans mean {nis['mean']:.2f}, median "
+        f"{nis['median']:.2f}, {100 * nis['inside_95']:.0f} % inside {POSE_BOUND_95:.2f} (consistent: 3; "
+        "far less: [grid] motion_noise is wider than the corrections the scan matches make, far more: narrower)"
+    )
 
 
 def _errors(run: LoadedRun, result: GridSlamResult, jump_tolerance: float):

@@ -48,6 +48,8 @@ def test_the_grid_command_writes_a_map_server_map_and_closes_the_loop(building, 
     errors = {row["estimator"]: row for row in document["ate"]}
     assert errors["grid filter (mean)"]["aligned_rmse"] < 0.1 < errors["dead reckoning"]["aligned_rmse"]
     assert document["nees"]["count"] > 0
+    assert document["motion_nis"]["count"] > 0.9 * document["processed_scans"]  # every matched scan
+    assert "Uncertainty: motion NIS of" in result.output
 
 
 def test_corner_fastslam_does_not_close_that_loop(building):

@@ -43,21 +43,24 @@ SIMULATION_SEEDS = range(201, 206)
 TABLE = HERE / "filters.csv"
 FILTER_NAMES = {MapKind.GRID: "grid filter", MapKind.LANDMARKS: "corner FastSLAM"}
 COLUMNS = ["log", "filter", "seed", "path", "sharpness_ratio", "extent_ratio", "final_cloud_max_m", "ate_rmse_m"]
-COLUMNS += ["dead_reckoning_ate_rmse_m", "odometry_ate_rmse_m", "true_extent_ratio", "nees_median"]
+COLUMNS += ["dead_reckoning_ate_rmse_m", "odometry_ate_rmse_m", "true_extent_ratio", "nees_median", "motion_nis_mean"]
 
 
-def estimate(run: LoadedRun, config: SlamConfig, kind: MapKind, seed: int) -> tuple[dict[str, tuple], float]:
+def estimate(run: LoadedRun, config: SlamConfig, kind: MapKind, seed: int) -> tuple[dict[str, tuple], dict]:
     """The mean path (R, 3) with its covariances (R, 3, 3) and the best particle's path (R, 3, no
-    covariance) of one filter run over every record of ``run``; and how far the farthest particle
-    of the final cloud is from its weighted mean, m (a split cloud: far)."""
+    covariance) of one filter run over every record of ``run``; and its run-wide columns: how far
+    the farthest particle of the final cloud is from its weighted mean, m (a split cloud: far), and
+    the grid filter's mean motion NIS (``mazeslam.grid.filter.motion_nis``; corner FastSLAM's NIS
+    is per observation, in the slam command's output)."""
     if kind == MapKind.GRID:
         result = grid_on_run(run, dataclasses.replace(config, grid=dataclasses.replace(config.grid, seed=seed)))
         paths = {"mean": result.record_trajectory(which="mean"), "best": (result.record_trajectory()[0], None)}
-        return paths, _farthest(result.particles.poses, result.particles.weights)
+        farthest = _farthest(result.particles.poses, result.particles.weights)
+        return paths, {"final_cloud_max_m": farthest, "motion_nis_mean": float(np.nanmean(result.nis))}
     corners = dataclasses.replace(config, fastslam=dataclasses.replace(config.fastslam, seed=seed))
     landmarks = slam_on_run(run, corners, progress=False)
     paths = {"mean": (landmarks.mean_poses, landmarks.pose_covariances), "best": (landmarks.best_poses, None)}
-    return paths, _farthest(landmarks.filter.poses, landmarks.filter.weights())
+    return paths, {"final_cloud_max_m": _farthest(landmarks.filter.poses, landmarks.filter.weights())}
 
 
 def _farthest(poses: np.ndarray, weights: np.ndarray) -> float:
@@ -66,7 +69,8 @@ def _farthest(poses: np.ndarray, weights: np.ndarray) -> float:
 
 
 def rows_for(run: LoadedRun, config: SlamConfig, log_name: str, seeds) -> list[dict]:
-    """One row per filter, seed and path: sharpness and extent; with truth ATE and NEES too."""
+    """One row per filter, seed and path: sharpness, extent and the run-wide columns (``estimate``);
+    with truth ATE and NEES too."""
     tolerance = config.odometry.jump_tolerance
     reckoned = dead_reckoning_without_glitches(run, tolerance)
     # The odometry the grid filter moves by: glitch pairs summed, at each record's own time.
@@ -74,16 +78,12 @@ def rows_for(run: LoadedRun, config: SlamConfig, log_name: str, seeds) -> list[d
     rows = []
     for kind in (MapKind.GRID, MapKind.LANDMARKS):
         for seed in seeds:
-            paths, farthest = estimate(run, config, kind, seed)
+            paths, run_wide = estimate(run, config, kind, seed)
             sharpness = paths_sharpness(run, {name: poses for name, (poses, _) in paths.items()}, tolerance)
             for path_name, (poses, covariances) in paths.items():
                 sharp = sharpness[path_name]
                 row = {"log": log_name, "filter": FILTER_NAMES[kind], "seed": seed, "path": path_name}
-                row |= {
-                    "sharpness_ratio": sharp.ratio,
-                    "extent_ratio": sharp.extent_ratio,
-                    "final_cloud_max_m": farthest,
-                }
+                row |= {"sharpness_ratio": sharp.ratio, "extent_ratio": sharp.extent_ratio, **run_wide}
                 if run.truth is not None:
                     row["ate_rmse_m"] = absolute_trajectory_error(poses, run.truth)["rmse"]
                     row["dead_reckoning_ate_rmse_m"] = absolute_trajectory_error(reckoned, run.truth)["rmse"]
