@@ -148,6 +148,36 @@ def test_import_follows_the_re_anchored_odometry(tmp_path):
     assert "reference" in world["truth_kind"] and world["sensor"]["first_beam_angle"] == pytest.approx(-np.pi / 2)
 
 
+# Raw odometry before the first scan in its own frame: 1 m forward, then a quarter turn in place;
+# the mapping run put that first scan at (5, 2) facing -x (its frame is turned by pi/2 from the odometry's).
+RAW_BEFORE_THE_FIRST_SCAN = """\
+ODOM 10 20 0 0 0 0 1.0 h 1.0
+ODOM 11 20 0 0 0 0 1.5 h 1.5
+ODOM 11 20 1.5707963267948966 0 0 0 1.7 h 1.7
+FLASER 3 1.0 2.0 3.0 5 2 3.141592653589793 5 2 3.141592653589793 1.8 h 1.8
+ODOM 5 2 3.141592653589793 0 0 0 0 h 1.8
+ODOM 4 2 3.141592653589793 0 0 0 2.0 h 2.0
+FLASER 3 1.0 2.0 3.0 4 2 3.141592653589793 4 2 3.141592653589793 2.1 h 2.1
+"""
+
+
+def test_the_reference_before_the_first_scan_is_moved_into_the_scans_frame(tmp_path):
+    from mazeslam.filters.motion import dead_reckoning
+
+    path = tmp_path / "turned.log"
+    path.write_text("PARAM robot_front_laser_max 50 h 0\n" + RAW_BEFORE_THE_FIRST_SCAN)
+    counts = import_carmen(path, tmp_path / "turned_course.log")
+    assert counts["odometry records before the first scan"] == 2
+    run = load_run(tmp_path / "turned_course.log")
+    # Hand-computed: the scan at (5, 2, pi) came after 1 m forward and a quarter turn left, so the
+    # robot started 1 m behind it along +y, facing pi - pi/2 = pi/2, and was at (5, 2, pi/2) after the 1 m.
+    np.testing.assert_allclose(run.start_pose, [5.0, 1.0, np.pi / 2], atol=1e-12)
+    truth = [[5, 2, np.pi / 2], [5, 2, np.pi], [5, 2, np.pi]]  # the sidecars keep 6 decimals
+    np.testing.assert_allclose(run.truth[:3], truth, atol=1e-6)
+    # Dead reckoning from the start reaches every record's reference pose (the odometry is exact here).
+    np.testing.assert_allclose(dead_reckoning(run.log, run.start_pose), run.truth, atol=1e-5)
+
+
 def test_imported_odometry_matches_the_reference_motion_between_scans(tmp_path):
     from mazeslam import log, sidecars
     from mazeslam.filters.motion import dead_reckoning

@@ -229,6 +229,26 @@ def is_carmen(path: str | Path) -> bool:
     return False
 
 
+def anchored_to_first_scan(start, poses: list, before: int) -> tuple:
+    """The reference's poses before the first scan moved into the frame of the scans' poses.
+
+    Before its first scan a corrected log has only raw odometry poses (the odometry's frame); the
+    scans' poses are the mapping run's (another frame, and the odometry to the first scan has its
+    own error). Moved rigidly so that the last of them (``poses[before - 1]``) lands on the first
+    scan's pose (``poses[before]``), the ``before`` odometry records and ``start`` (3,) (the pose
+    before the first record) join the scans' frame, as the odometry after each scan does, and
+    dead reckoning from ``start`` reaches the first scan exactly. Returns ``(start, poses)``; as
+    they are without odometry before the first scan or without a scan.
+    """
+    from mazeslam.geometry import compose, relative
+
+    if not before or before >= len(poses):
+        return start, poses
+    first_scan, last_raw = np.asarray(poses[before]), np.asarray(poses[before - 1])
+    moved = compose(first_scan, relative(last_raw, np.asarray([start, *poses[:before]])))
+    return moved[0], [*moved[1:], *poses[before:]]
+
+
 def import_carmen(path: str | Path, out: str | Path) -> dict:
     """Write a CARMEN log as a course log ``out`` with a reference-pose sidecar and a sensor sidecar.
 
@@ -239,7 +259,8 @@ def import_carmen(path: str | Path, out: str | Path) -> dict:
     change); each scan a scan record (ranges at or beyond the laser's maximum become 0, no
     return). The scan's own "odometry" pose is the corrected one in these logs, so it adds no
     motion. ``*.truth.csv`` holds the anchored poses (the corrected pose at each scan, plus the
-    raw odometry since it) - a reference from a mapping run, not independent ground truth; the
+    raw odometry since it; before the first scan, the raw odometry moved to end on it,
+    ``anchored_to_first_scan``) - a reference from a mapping run, not independent ground truth; the
     map sidecar says so and records the front laser's beam geometry. Returns counts.
     """
     from mazeslam import sidecars
@@ -252,6 +273,7 @@ def import_carmen(path: str | Path, out: str | Path) -> dict:
     times, poses = [], []
     counts: Counter[str] = Counter()
     anchor = None  # the pose the current odometry stretch is measured from
+    start = None  # the first anchor: where the robot is before the first record
     last_time = -math.inf
 
     def clock(t):
@@ -265,14 +287,18 @@ def import_carmen(path: str | Path, out: str | Path) -> dict:
     with LogWriter(out, carmen.n_beams) as writer:
 
         def step(t, pose):
-            nonlocal anchor
-            if anchor is not None:
+            nonlocal anchor, start
+            if anchor is None:
+                start = pose
+            else:
                 motion = relative(anchor, pose)
                 distance = math.copysign(math.hypot(motion[0], motion[1]), motion[0])
                 writer.write_odometry(clock(t), distance, float(motion[2]))
                 times.append(last_time)
                 poses.append(pose)
                 counts["odometry records"] += 1
+                if not counts["scans"]:
+                    counts["odometry records before the first scan"] += 1
             anchor = pose
 
         for kind, index in carmen.sequence:
@@ -287,12 +313,15 @@ def import_carmen(path: str | Path, out: str | Path) -> dict:
                 step(t, pose)
             else:
                 t = carmen.scan_times[index]
+                if not counts["scans"] and not counts["odometry records"]:
+                    start = carmen.scan_poses[index]  # no motion recorded before the first scan
                 anchor = carmen.scan_poses[index]  # the next ODOM messages start from here
                 ranges = carmen.ranges[index]
                 writer.write_scan(clock(t), np.where(ranges >= max_range - 1e-6, 0.0, ranges))
                 times.append(last_time)
                 poses.append(carmen.scan_poses[index])
                 counts["scans"] += 1
+    start, poses = anchored_to_first_scan(start, poses, counts["odometry records before the first scan"])
     sidecars.write_truth(sidecars.truth_path(out), np.array(times), np.array(poses))
     sensor = {"beams": carmen.n_beams, "max_range": max_range, **carmen.beam_geometry.to_dict()}
     sidecars.write_map(
@@ -300,7 +329,7 @@ def import_carmen(path: str | Path, out: str | Path) -> dict:
         np.empty((0, 4)),
         np.empty((0, 2)),
         sensor,
-        start_pose=np.asarray(poses[0]).tolist() if poses else [0.0, 0.0, 0.0],
+        start_pose=np.asarray(start).tolist() if start is not None else [0.0, 0.0, 0.0],
         truth_kind="reference: poses of a grid-mapping run (gmapping), not ground truth",
         source={"carmen_log": str(path), "ignored": dict(carmen.ignored)},
     )
