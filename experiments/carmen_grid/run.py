@@ -2,7 +2,11 @@
 the logs' reference poses, the relation metric (Kümmerle et al. 2009, ``mazeslam.evaluation.relations``:
 mean translational and rotational error over every pair of scans whose reference positions are within
 ``BUILDING_RADIUS`` = 3 m), wall-clock and CPU seconds against the log's duration, peak memory, and the best
-particle's map (map_server YAML + PGM + PNG) beside each log's own picture.
+particle's map (map_server YAML + PGM + PNG) beside each log's own picture. Consistency: the pose NEES
+of the cloud's mean against the reference poses (with the covariance the filter states; the reference
+is another SLAM estimate, not the truth, and its own errors count as the filter's here) and the motion NIS at the
+processed scans (``mazeslam.grid.filter.motion_nis``: the scan match's correction against the motion
+noise, needs no reference).
 
 The filter's settings are configs/carmen.toml's ``[grid]`` (and ``[scan_matching]`` for the laser
 odometry), as ``mazeslam slam LOG --config configs/carmen.toml`` runs them, with the seed replaced.
@@ -28,7 +32,8 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from mazeslam.evaluation.metrics import absolute_trajectory_error
+from mazeslam.evaluation.consistency import nees_summary
+from mazeslam.evaluation.metrics import absolute_trajectory_error, normalized_estimation_error
 from mazeslam.evaluation.relations import BUILDING_RADIUS, relation_metric, spatial_relations
 from mazeslam.grid.map_io import grid_states, write_map
 from mazeslam.grid_command import grid_on_run
@@ -69,6 +74,7 @@ def run_one(job: tuple[str, int]) -> dict:
     seconds, cpu_seconds = time.perf_counter() - began, time.process_time() - began_cpu
     reference = run.truth[result.scan_records]
     ate = absolute_trajectory_error(result.best_poses, reference, align=True)
+    nees = nees_summary(normalized_estimation_error(result.mean_poses, result.covariances, reference))
     out = RESULTS / f"{name}_seed{seed}"
     out.mkdir(parents=True, exist_ok=True)
     write_map(grid_states(result.grid), out)
@@ -81,6 +87,11 @@ def run_one(job: tuple[str, int]) -> dict:
         "processed": int(result.processed.sum()),
         "ate_rmse_m": ate["rmse"],
         "ate_max_m": ate["max"],
+        "ate_mean_path_m": absolute_trajectory_error(result.mean_poses, reference, align=True)["rmse"],
+        "nees_median": nees["median"],
+        "nees_inside_95": nees["inside_95"],
+        "nis_mean": float(np.nanmean(result.nis)),
+        "nis_median": float(np.nanmedian(result.nis)),
         **relation_row(result.best_poses, reference),
         "seconds": seconds,
         "cpu_seconds": cpu_seconds,

@@ -68,10 +68,11 @@ class GridSlamParams:
         blind_motion_noise: the motion's noise on a log with no odometry records, where the laser
             odometry matches blind (orebro): most of its intervals are as good as elsewhere, a few
             a metre or a right angle wrong. Its fit there (0.38, 0.24, 0.16, motion_noise.md),
-            pulled up by those few, made orebro worse (seeds 0 and 1: 0.67 and 0.84 m aligned ATE,
-            against 0.55 and 0.53 m), and its motion NIS (median 0.01) says it is far wider than
-            most corrections; the filter's earlier default (0.1, 0.1, 0.05) is kept for it. The
-            every-scan search, not this noise, is what catches the wrong intervals.
+            pulled up by those few, made orebro worse (seeds 0 and 1: 0.90 and 0.64 m aligned ATE,
+            against 0.55 and 0.48 m with this default; experiments/carmen_grid/results/
+            blind_noise_trial.csv and table.csv), and its motion NIS (median 0.01) says it is far
+            wider than most corrections; the filter's earlier noise (0.1, 0.1, 0.05) is kept for
+            it. The every-scan search, not this noise, is what catches the wrong intervals.
         linear_update, angular_update: a scan is processed after this much travel (m) or turning
             (rad) since the last processed scan; others only carry the motion on.
         kernel_step: spacing (x m, y m, theta rad) of the 3 x 3 x 3 stencil around the match.
