@@ -126,13 +126,17 @@ FLASER 3 1.5 2.5 3.5 0.3 0.02 0.05 0.3 0.02 0.05 2.0 h 2.0
 """
 
 
-def test_import_follows_the_re_anchored_odometry(tmp_path):
-    from mazeslam import log, sidecars
-    from mazeslam.imports.carmen import import_carmen
+def import_text(tmp_path, name: str, lines: str) -> dict:
+    """Import the CARMEN ``lines`` (a 50 m laser) to ``tmp_path / "<name>_course.log"``; the import's counts."""
+    path = tmp_path / f"{name}.log"
+    path.write_text("PARAM robot_front_laser_max 50 h 0\n" + lines)
+    return import_carmen(path, tmp_path / f"{name}_course.log")
 
-    path = tmp_path / "a.log"
-    path.write_text("PARAM robot_front_laser_max 50 h 0\n" + ANCHORED)
-    counts = import_carmen(path, tmp_path / "a_course.log")
+
+def test_import_follows_the_re_anchored_odometry(tmp_path):
+    from mazeslam import log
+
+    counts = import_text(tmp_path, "a", ANCHORED)
     assert counts["scans"] == 2 and counts["re-anchoring ODOM messages"] == 1
     course_log = log.read(tmp_path / "a_course.log")
     records = list(course_log.records())
@@ -164,9 +168,7 @@ FLASER 3 1.0 2.0 3.0 4 2 3.141592653589793 4 2 3.141592653589793 2.1 h 2.1
 def test_the_reference_before_the_first_scan_is_moved_into_the_scans_frame(tmp_path):
     from mazeslam.filters.motion import dead_reckoning
 
-    path = tmp_path / "turned.log"
-    path.write_text("PARAM robot_front_laser_max 50 h 0\n" + RAW_BEFORE_THE_FIRST_SCAN)
-    counts = import_carmen(path, tmp_path / "turned_course.log")
+    counts = import_text(tmp_path, "turned", RAW_BEFORE_THE_FIRST_SCAN)
     assert counts["odometry records before the first scan"] == 2
     run = load_run(tmp_path / "turned_course.log")
     # Hand-computed: the scan at (5, 2, pi) came after 1 m forward and a quarter turn left, so the

@@ -295,7 +295,7 @@ class GridSlam:
                     if accepted:
                         nis[index] = motion_nis(pose, predicted, covariance)
                     else:
-                        pose = predict_relative(self.poses[index][None], motion, covariance, self.rng)[0]
+                        pose = self._unmatched_draw(index, motion, covariance)
                     matched += accepted
                     self.poses[index] = pose
                 else:
@@ -313,8 +313,8 @@ class GridSlam:
         )
 
     def _unmatched_draw(self, index: int, motion: np.ndarray, covariance: np.ndarray) -> np.ndarray:
-        """The pose (3,) of particle ``index`` moved by ``motion`` (3,) with noise where nothing of its
-        map lies near the scan: ``covariance`` (3, 3), or, before its first scan, the motion noise
+        """The pose (3,) of particle ``index`` moved by ``motion`` (3,) with noise where its match failed
+        or nothing of its map lies near the scan: ``covariance`` (3, 3), or, before its first scan, the motion noise
         alone, without ``motion_floor``. The floor stands for the laser odometry's errors between
         scans; the motion to the first scan is odometry from the known start pose (none when the
         first record is a scan), and a floor there would turn each particle's whole map by its

@@ -237,12 +237,15 @@ def anchored_to_first_scan(start, poses: list, before: int) -> tuple:
     own error). Moved rigidly so that the last of them (``poses[before - 1]``) lands on the first
     scan's pose (``poses[before]``), the ``before`` odometry records and ``start`` (3,) (the pose
     before the first record) join the scans' frame, as the odometry after each scan does, and
-    dead reckoning from ``start`` reaches the first scan exactly. Returns ``(start, poses)``; as
-    they are without odometry before the first scan or without a scan.
+    dead reckoning from ``start`` reaches the first scan exactly. Returns ``(start, poses)``. With
+    no odometry before the first scan the robot starts at that scan's pose; with no scan, nothing
+    is moved.
     """
     from mazeslam.geometry import compose, relative
 
-    if not before or before >= len(poses):
+    if not before:
+        return (poses[0] if poses else start), poses
+    if before >= len(poses):
         return start, poses
     first_scan, last_raw = np.asarray(poses[before]), np.asarray(poses[before - 1])
     moved = compose(first_scan, relative(last_raw, np.asarray([start, *poses[:before]])))
@@ -313,8 +316,6 @@ def import_carmen(path: str | Path, out: str | Path) -> dict:
                 step(t, pose)
             else:
                 t = carmen.scan_times[index]
-                if not counts["scans"] and not counts["odometry records"]:
-                    start = carmen.scan_poses[index]  # no motion recorded before the first scan
                 anchor = carmen.scan_poses[index]  # the next ODOM messages start from here
                 ranges = carmen.ranges[index]
                 writer.write_scan(clock(t), np.where(ranges >= max_range - 1e-6, 0.0, ranges))
