@@ -26,6 +26,7 @@ import dataclasses
 import resource
 import tempfile
 import time
+from collections.abc import Callable
 from multiprocessing import Pool
 from pathlib import Path
 
@@ -38,7 +39,7 @@ from mazeslam.evaluation.relations import BUILDING_RADIUS, relation_metric, spat
 from mazeslam.grid.map_io import grid_states, write_map
 from mazeslam.grid_command import grid_on_run
 from mazeslam.imports.carmen import import_carmen
-from mazeslam.loaded_run import load_run
+from mazeslam.loaded_run import LoadedRun, load_run
 from mazeslam.sidecars import write_trajectory
 from mazeslam.slam import load_slam_config
 
@@ -60,13 +61,18 @@ def relation_row(poses: np.ndarray, reference: np.ndarray) -> dict:
     }
 
 
-def run_one(job: tuple[str, int]) -> dict:
-    """Import one log, run the grid filter with one seed, write its map and trajectory."""
-    name, seed = job
+def imported_run(name: str) -> LoadedRun:
+    """The CARMEN log ``name`` (e.g. "aces") imported as ``mazeslam import carmen`` does and loaded."""
     with tempfile.TemporaryDirectory() as folder:
         course = Path(folder) / f"{name}.log"
         import_carmen(CARMEN / f"{name}-corrected.log.gz", course)
-        run = load_run(course)
+        return load_run(course)
+
+
+def run_one(job: tuple[str, int]) -> dict:
+    """Import one log, run the grid filter with one seed, write its map and trajectory."""
+    name, seed = job
+    run = imported_run(name)
     loaded_mb = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
     began, began_cpu = time.perf_counter(), time.process_time()
     config = load_slam_config(CONFIG)
@@ -111,18 +117,26 @@ def main() -> None:
     parser.add_argument("--jobs", type=int, default=2)
     args = parser.parse_args()
     jobs = [(name, seed) for name in args.logs for seed in args.seeds]
-    with Pool(args.jobs, maxtasksperchild=1) as pool:
+    run_jobs(run_one, jobs, args.jobs, RESULTS / "table.csv", ["log", "seed"])
+
+
+def run_jobs(worker: Callable[[tuple], dict], jobs: list[tuple], processes: int, path: Path, keys: list[str]) -> None:
+    """Run ``worker`` on each of ``jobs``, each in a process of its own (``processes`` at a time),
+    printing each row it returns, then write the rows to the CSV ``path`` with the rows already
+    there whose ``keys`` they do not have (a run of some logs or seeds keeps the others'), sorted by
+    ``keys``, and print the table written."""
+    with Pool(processes, maxtasksperchild=1) as pool:
         rows = []
-        for row in pool.imap_unordered(run_one, jobs):
+        for row in pool.imap_unordered(worker, jobs):
             print(row, flush=True)
             rows.append(row)
-    table = pd.DataFrame(rows).sort_values(["log", "seed"])
-    RESULTS.mkdir(parents=True, exist_ok=True)
-    path = RESULTS / "table.csv"
-    if path.exists():  # keep the rows of other logs and seeds
+    table = pd.DataFrame(rows)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    if path.exists():
         old = pd.read_csv(path)
-        keep = ~old.set_index(["log", "seed"]).index.isin(table.set_index(["log", "seed"]).index)
-        table = pd.concat([old[keep], table]).sort_values(["log", "seed"])
+        keep = ~old.set_index(keys).index.isin(table.set_index(keys).index)
+        table = pd.concat([old[keep], table])
+    table = table.sort_values(keys)
     table.to_csv(path, index=False, float_format="%.4g")
     print(table.to_markdown(index=False, floatfmt=".3g"))
 

@@ -70,7 +70,7 @@ class GridSlamParams:
             a metre or a right angle wrong. Its fit there (0.38, 0.24, 0.16, motion_noise.md),
             pulled up by those few, made orebro worse (seeds 0 and 1: 0.90 and 0.64 m aligned ATE,
             against 0.55 and 0.48 m with this default; experiments/carmen_grid/results/
-            blind_noise_trial.csv and table.csv), and its motion NIS (median 0.01) says it is far
+            blind_trials.csv and table.csv), and its motion NIS (median 0.01) says it is far
             wider than most corrections; the filter's earlier noise (0.1, 0.1, 0.05) is kept for
             it. The every-scan search, not this noise, is what catches the wrong intervals.
         linear_update, angular_update: a scan is processed after this much travel (m) or turning
