@@ -621,9 +621,15 @@ def calibrate(log_files, config_path, write_path, first_beam_angle, beam_directi
     type=click.Path(exists=True, dir_okay=False, path_type=Path),
     help="A slam config; with [scan_matching] enabled, the laser odometry is measured instead.",
 )
-def odometry_noise(log_file, config_path):
+@click.option(
+    "--trimmed",
+    is_flag=True,
+    help="Fit again without the stretches beyond 3 standard deviations of the fit (failed scan matches, "
+    "glitches), until none is left out anew; prints how many were.",
+)
+def odometry_noise(log_file, config_path, trimmed):
     """Measure a log's odometry noise against its truth sidecar, as [fastslam] settings."""
-    from mazeslam.evaluation.odometry_noise import measure_motion_noise
+    from mazeslam.evaluation.odometry_noise import fit_noise, fit_noise_trimmed, motion_stretch_errors
     from mazeslam.filters.scan_matching import laser_odometry
     from mazeslam.loaded_run import load_run
     from mazeslam.slam import load_slam_config
@@ -638,13 +644,16 @@ def odometry_noise(log_file, config_path):
     laser = laser_odometry(run.log, run.geometry, config.scan_matching) if config.scan_matching.enabled else None
     source = "laser odometry" if laser is not None else "odometry"
     try:
-        noise = measure_motion_noise(run.log, run.truth, laser)
+        errors = motion_stretch_errors(run.log, run.truth, laser)
+        noise = fit_noise_trimmed(errors) if trimmed else fit_noise(errors)
     except ValueError as error:
         raise click.ClickException(f"{log_file}: {error}") from error
     click.echo(
         f"# {log_file}: {noise.stretches} stretches between observations, {noise.distance:.2f} m driven, "
         f"{noise.turn:.1f} rad turned ({source} against {truth_file})"
     )
+    if trimmed:
+        click.echo(f"# trimmed: {noise.left_out} stretches left out, beyond 3 standard deviations of the fit")
     click.echo("[fastslam]")
     click.echo(f"sigmaX = {noise.noise.sigmaX:.4g}          # m per sqrt(m)")
     click.echo(f"sigmaTH = {noise.noise.sigmaTH:.4g}         # rad per sqrt(rad) turned")

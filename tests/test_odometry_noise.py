@@ -70,6 +70,15 @@ def test_command_prints_fastslam_settings_or_names_the_missing_truth(default_run
     assert result.exit_code != 0 and "no truth sidecar" in result.output
 
 
+def test_command_trimmed_prints_what_it_left_out(default_run):
+    plain = CliRunner().invoke(main, ["odometry-noise", str(default_run.log_path)])
+    trimmed = CliRunner().invoke(main, ["odometry-noise", str(default_run.log_path), "--trimmed"])
+    assert trimmed.exit_code == 0, trimmed.output
+    left_out = int(trimmed.output.split("# trimmed: ")[1].split()[0])
+    stretches = [int(text.output.split(": ")[1].split()[0]) for text in (plain, trimmed)]
+    assert stretches[1] == stretches[0] - left_out
+
+
 def test_laser_odometry_errors_by_hand():
     from mazeslam.evaluation.odometry_noise import laser_stretch_errors
     from mazeslam.filters.scan_matching import LaserOdometry
@@ -82,3 +91,37 @@ def test_laser_odometry_errors_by_hand():
     assert rows == pytest.approx(np.array([[0.9, 0.01, 0.1, -0.01], [1.0, np.pi / 2, 0.0, 0.0]]), abs=1e-12)
     with pytest.raises(ValueError, match="one pose per scan"):
         laser_stretch_errors(laser, truth[:2])
+
+
+def model_errors(rng, count, sigma_x, sigma_th, sigma_drive):
+    """Stretch errors (count, 4) drawn from the filter's motion model with known sigmas."""
+    moved, turned = rng.uniform(0.2, 2.0, count), rng.uniform(0.0, 1.0, count)
+    along = rng.normal(0.0, sigma_x * np.sqrt(moved))
+    heading = rng.normal(0.0, np.sqrt(sigma_th**2 * turned + sigma_drive**2 * moved))
+    return np.column_stack([moved, turned, along, heading])
+
+
+def test_trimmed_fit_ignores_failed_matches_that_pull_the_plain_fit_up():
+    from mazeslam.evaluation.odometry_noise import fit_noise, fit_noise_trimmed
+
+    rng = np.random.default_rng(5)
+    errors = model_errors(rng, 2000, 0.02, 0.01, 0.004)
+    failed = rng.choice(len(errors), 60, replace=False)  # 3 % of the matches a metre or half a radian off
+    errors[failed, 2] += rng.choice([-1.0, 1.0], len(failed)) * rng.uniform(0.5, 2.0, len(failed))
+    errors[failed, 3] += rng.choice([-1.0, 1.0], len(failed)) * rng.uniform(0.3, 1.5, len(failed))
+    plain, trimmed = fit_noise(errors).noise, fit_noise_trimmed(errors)
+    assert plain.sigmaX > 5 * 0.02 and plain.sigmaTH_drive > 5 * 0.004
+    assert trimmed.noise.sigmaX == pytest.approx(0.02, rel=0.1)
+    assert trimmed.noise.sigmaTH == pytest.approx(0.01, rel=0.15)
+    assert trimmed.noise.sigmaTH_drive == pytest.approx(0.004, rel=0.15)
+    assert 60 <= trimmed.left_out <= 90 and trimmed.stretches == 2000 - trimmed.left_out
+
+
+def test_trimmed_fit_of_clean_errors_is_the_plain_fit_within_its_spread():
+    from mazeslam.evaluation.odometry_noise import fit_noise, fit_noise_trimmed
+
+    errors = model_errors(np.random.default_rng(6), 2000, 0.03, 0.02, 0.01)
+    plain, trimmed = fit_noise(errors), fit_noise_trimmed(errors)
+    assert trimmed.left_out <= 0.01 * len(errors)
+    for name in ("sigmaX", "sigmaTH", "sigmaTH_drive"):
+        assert getattr(trimmed.noise, name) == pytest.approx(getattr(plain.noise, name), rel=0.05)

@@ -6,11 +6,14 @@ For each log: ``mazeslam import carmen`` then FastSLAM with configs/carmen.toml 
 the family: laser odometry, FastSLAM 2.0, 100 particles) under ``--seeds`` filter seeds. Scored at
 the scans against the reference poses (gmapping's corrected poses: a reference, not ground truth;
 the log has no other pose to score against): the ATE of the wheel odometry, of the laser odometry
-alone and of FastSLAM (median and worst over the seeds), with and without SE(2) alignment;
-landmarks, run time, particles (results/table.csv and table.md; a run with --logs keeps the other
-logs' rows); per seed the ATE, aligned ATE and the relation
-metric (Kümmerle et al. 2009; results/seeds.csv). Figures in docs/img/carmen/: the median seed's
-map drawn over the scans, and its scans beside the picture of the map that comes with the log.
+alone and of FastSLAM (median and worst over the seeds), with and without SE(2) alignment; the
+pose NEES of the mean path against the reference with the cloud's covariance (the reference's own
+errors count as the filter's) and the mean NIS of the corner observations (2 degrees of freedom:
+2 when the noise is stated right), medians over the seeds; landmarks, run time, particles
+(results/table.csv and table.md; a run with --logs keeps the other logs' rows); per seed the ATE,
+aligned ATE, the relation metric (Kümmerle et al. 2009), NEES and NIS (results/seeds.csv).
+Figures in docs/img/carmen/: the median seed's map drawn over the scans, and its scans beside the
+picture of the map that comes with the log.
 """
 
 from __future__ import annotations
@@ -29,7 +32,8 @@ import numpy as np  # noqa: E402
 import pandas as pd  # noqa: E402
 
 from mazeslam.evaluation import slam_report  # noqa: E402
-from mazeslam.evaluation.metrics import absolute_trajectory_error  # noqa: E402
+from mazeslam.evaluation.consistency import nees_summary, nis_summary  # noqa: E402
+from mazeslam.evaluation.metrics import absolute_trajectory_error, normalized_estimation_error  # noqa: E402
 from mazeslam.evaluation.relations import BUILDING_RADIUS, relation_metric, spatial_relations  # noqa: E402
 from mazeslam.filters.motion import dead_reckoning  # noqa: E402
 from mazeslam.filters.scan_matching import LaserOdometry, laser_odometry  # noqa: E402
@@ -66,12 +70,20 @@ def run_one(
     relations = relation_metric(
         result.mean_poses[scans], reference[scans], spatial_relations(reference[scans], BUILDING_RADIUS)
     )
+    nees = nees_summary(
+        normalized_estimation_error(result.mean_poses[scans], result.pose_covariances[scans], reference[scans])
+    )
+    nis = nis_summary(result.nis)
     return {
         "seed": seed,
         "ate": raw,
         "aligned": aligned,
         "rel_trans_m": relations["trans_mean"],
         "rel_rot_deg": float(np.degrees(relations["rot_mean"])),
+        "nees_median": nees["median"],
+        "nees_inside_95": nees["inside_95"],
+        "nis_mean": nis["mean"],
+        "nis_inside_95": nis["inside_95"],
         "seconds": seconds,
         "landmarks": len(result.landmarks),
         "result": result,
@@ -102,6 +114,8 @@ def evaluate(name: str, seeds: int, out: Path) -> tuple[dict, list[dict]]:
     row["FastSLAM ATE [m] (median)"] = float(np.median([run["ate"] for run in runs]))
     row["FastSLAM ATE [m] (worst)"] = runs[-1]["ate"]
     row["FastSLAM aligned [m] (median)"] = float(np.median([run["aligned"] for run in runs]))
+    row["NEES (median)"] = float(np.median([run["nees_median"] for run in runs]))
+    row["NIS mean (median)"] = float(np.median([run["nis_mean"] for run in runs]))
     row["landmarks"] = median["landmarks"]
     row["FastSLAM s"] = matching_seconds + float(np.median([run["seconds"] for run in runs]))
     points = slam_report.scan_points_world(

@@ -5,6 +5,8 @@ Per log: the laser odometry with configs/carmen.toml's ``[scan_matching]``, as t
 by it, fitted interval by interval to the motion model (``mazeslam.evaluation.odometry_noise``, the
 numbers ``mazeslam odometry-noise LOG --config configs/carmen.toml`` prints), and the median over
 the logs. orebro has no odometry and its intervals are matched blind: its fit is the largest.
+Beside it the trimmed fit (``fit_noise_trimmed``, ``--trimmed``): the same without the intervals
+whose error lies beyond 3 standard deviations of the fit (failed matches), and how many those are.
 
     python experiments/carmen_grid/motion_noise.py
 
@@ -13,28 +15,21 @@ Writes ``results/motion_noise.csv`` and ``results/motion_noise.md``.
 
 from __future__ import annotations
 
-import tempfile
-from pathlib import Path
-
 import pandas as pd
-from run import CARMEN, CONFIG, LOGS, RESULTS  # this folder's run.py
+from run import CONFIG, LOGS, RESULTS, imported_run  # this folder's run.py
 
-from mazeslam.evaluation.odometry_noise import measure_motion_noise
+from mazeslam.evaluation.odometry_noise import fit_noise, fit_noise_trimmed, motion_stretch_errors
 from mazeslam.filters.scan_matching import laser_odometry
-from mazeslam.imports.carmen import import_carmen
-from mazeslam.loaded_run import load_run
 from mazeslam.slam import load_slam_config
 
 
 def fit_row(name: str) -> dict:
     """The laser odometry's fitted noise on one log."""
-    with tempfile.TemporaryDirectory() as folder:
-        course = Path(folder) / f"{name}.log"
-        import_carmen(CARMEN / f"{name}-corrected.log.gz", course)
-        run = load_run(course)
+    run = imported_run(name)
     config = load_slam_config(CONFIG)
     laser = laser_odometry(run.log, run.geometry, config.scan_matching)
-    measured = measure_motion_noise(run.log, run.truth, laser)
+    errors = motion_stretch_errors(run.log, run.truth, laser)
+    measured, trimmed = fit_noise(errors), fit_noise_trimmed(errors)
     return {
         "log": name,
         "intervals": measured.stretches,
@@ -43,6 +38,10 @@ def fit_row(name: str) -> dict:
         "sigmaX": measured.noise.sigmaX,
         "sigmaTH": measured.noise.sigmaTH,
         "sigmaTH_drive": measured.noise.sigmaTH_drive,
+        "trimmed_sigmaX": trimmed.noise.sigmaX,
+        "trimmed_sigmaTH": trimmed.noise.sigmaTH,
+        "trimmed_sigmaTH_drive": trimmed.noise.sigmaTH_drive,
+        "left_out": trimmed.left_out,
     }
 
 
@@ -54,7 +53,9 @@ def main() -> None:
         "The laser odometry's noise on the CARMEN logs (configs/carmen.toml's [scan_matching]) fitted "
         "against the reference poses, interval by interval: sigmaX m/sqrt(m), sigmaTH rad/sqrt(rad), "
         "sigmaTH_drive rad/sqrt(m) (mazeslam.evaluation.odometry_noise); the median row gives the grid "
-        "filter's default motion noise.\n\n" + table.to_markdown(floatfmt=".4g") + "\n"
+        "filter's default motion noise. trimmed_*: the fit without the intervals beyond 3 standard deviations "
+        "of it (left_out of them, the failed matches; fit_noise_trimmed); their median row gives corner "
+        "FastSLAM's noise in configs/carmen.toml.\n\n" + table.to_markdown(floatfmt=".4g") + "\n"
     )
     (RESULTS / "motion_noise.md").write_text(text)
     print(text)

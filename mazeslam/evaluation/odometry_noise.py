@@ -18,12 +18,17 @@ Systematic errors (a wrong wheel radius) count as noise here, as they must for t
 
 Laser odometry (``mazeslam.filters.scan_matching``) is measured the same way, interval by interval
 between scans (``laser_stretch_errors``): D and T are then the interval's matched distance and turn.
+
+A few failed scan matches (metres or a right angle off) pull a least-squares fit far above the
+error of a typical interval. ``fit_noise_trimmed`` fits again without the stretches whose error
+lies beyond ``OUTLIER_SIGMAS`` standard deviations of the fit, until none is left out anew: the
+noise of the matches that work, with the failures counted apart (``MeasuredOdometryNoise.left_out``).
 """
 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 from scipy.optimize import nnls
@@ -43,12 +48,19 @@ class MeasuredOdometryNoise:
         stretches: how many stretches between observations were used.
         distance: odometry distance they cover, m.
         turn: odometry turning they cover, rad.
+        left_out: stretches left out of the fit as outliers (``fit_noise_trimmed``).
     """
 
     noise: OdometryNoise
     stretches: int
     distance: float
     turn: float
+    left_out: int = 0
+
+
+#: ``fit_noise_trimmed`` leaves out a stretch whose along-track or heading error lies beyond this
+#: many of the fit's standard deviations (a normal error does so 0.5 % of the time).
+OUTLIER_SIGMAS = 3.0
 
 
 def stretch_errors(course_log: CourseLog, truth: np.ndarray) -> np.ndarray:
@@ -129,21 +141,42 @@ def motion_stretch_errors(
     return stretch_errors(course_log, reference)
 
 
-def measure_motion_noise(
-    course_log: CourseLog, reference: np.ndarray, laser: LaserOdometry | None = None
-) -> MeasuredOdometryNoise:
-    """The noise of whatever moves the filter (``motion_stretch_errors``), fitted."""
-    return fit_noise(motion_stretch_errors(course_log, reference, laser))
-
-
 def fit_noise(errors: np.ndarray) -> MeasuredOdometryNoise:
     """The noise parameters that fit the stretch errors (K, 4) ``[D, T, e_along, e_theta]`` by
     non-negative least squares (see the module docstring)."""
+    moved, turned = errors[:, 0], errors[:, 1]
+    along_coefficients, heading_coefficients = _variance_coefficients(errors)
+    drive_var, turn_var = heading_coefficients
+    noise = OdometryNoise(math.sqrt(along_coefficients[0]), math.sqrt(turn_var), math.sqrt(drive_var))
+    return MeasuredOdometryNoise(noise, len(errors), float(moved.sum()), float(turned.sum()))
+
+
+def fit_noise_trimmed(errors: np.ndarray, sigmas: float = OUTLIER_SIGMAS, rounds: int = 50) -> MeasuredOdometryNoise:
+    """``fit_noise`` of the stretch errors (K, 4) ``[D, T, e_along, e_theta]`` without their outliers:
+    fit, leave out every stretch whose along-track or heading error lies beyond ``sigmas`` standard
+    deviations of that fit (its variance ``a D + b T``, the least-squares coefficients), fit the rest,
+    and so on until the stretches left out stop changing (at most ``rounds`` fits). Stretches, distance
+    and turn are the kept ones'; ``left_out`` counts the others."""
+    kept = np.ones(len(errors), dtype=bool)
+    for _ in range(rounds):
+        along_coefficients, heading_coefficients = _variance_coefficients(errors[kept])
+        motion = errors[:, :2]
+        inside = (errors[:, 2] ** 2 <= sigmas**2 * (motion @ along_coefficients)) & (
+            errors[:, 3] ** 2 <= sigmas**2 * (motion @ heading_coefficients)
+        )
+        if (inside == kept).all():
+            break
+        kept = inside
+    return replace(fit_noise(errors[kept]), left_out=int((~kept).sum()))
+
+
+def _variance_coefficients(errors: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Non-negative ``(a, b)`` (2,) of the along-track and of the heading error's variance
+    ``a D + b T`` that fit the stretch errors (K, 4) ``[D, T, e_along, e_theta]`` best."""
     moved, turned, along, heading = errors.T
     if not (moved > 0).any():
         raise ValueError("the log never drives: the distance noise cannot be measured")
     motion = np.column_stack([moved, turned])
-    (distance_var, _), _ = nnls(motion, along**2)  # turning on the spot also shifts the axle a little
-    (drive_var, turn_var), _ = nnls(motion, heading**2)
-    noise = OdometryNoise(math.sqrt(distance_var), math.sqrt(turn_var), math.sqrt(drive_var))
-    return MeasuredOdometryNoise(noise, len(errors), float(moved.sum()), float(turned.sum()))
+    along_coefficients, _ = nnls(motion, along**2)  # turning on the spot also shifts the axle a little
+    heading_coefficients, _ = nnls(motion, heading**2)
+    return along_coefficients, heading_coefficients
