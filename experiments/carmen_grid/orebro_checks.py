@@ -27,7 +27,7 @@ misses metres along corridors: docs/grid.md, "Known limits").
    of the reference with the laser odometry's pose taken at the scans where the past fits it as
    well as the reference's (within ``TIE``) or better.
 
-Run: ``python experiments/carmen_grid/orebro_checks.py`` (about 15 CPU minutes); writes
+Run: ``python experiments/carmen_grid/orebro_checks.py`` (about 10 CPU minutes); writes
 ``results/orebro_checks.md``.
 """
 
