@@ -625,7 +625,8 @@ def calibrate(log_files, config_path, write_path, first_beam_angle, beam_directi
     "--trimmed",
     is_flag=True,
     help="Fit again without the stretches beyond 3 standard deviations of the fit (failed scan matches, "
-    "glitches), until none is left out anew; prints how many were.",
+    "glitches; for laser odometry at least [scan_matching] prior_floor), until none is left out anew; "
+    "prints how many were.",
 )
 def odometry_noise(log_file, config_path, trimmed):
     """Measure a log's odometry noise against its truth sidecar, as [fastslam] settings."""
@@ -645,7 +646,8 @@ def odometry_noise(log_file, config_path, trimmed):
     source = "laser odometry" if laser is not None else "odometry"
     try:
         errors = motion_stretch_errors(run.log, run.truth, laser)
-        noise = fit_noise_trimmed(errors) if trimmed else fit_noise(errors)
+        floor = config.scan_matching.prior_floor if laser is not None else 0.0
+        noise = fit_noise_trimmed(errors, floor) if trimmed else fit_noise(errors)
     except ValueError as error:
         raise click.ClickException(f"{log_file}: {error}") from error
     click.echo(
@@ -653,7 +655,10 @@ def odometry_noise(log_file, config_path, trimmed):
         f"{noise.turn:.1f} rad turned ({source} against {truth_file})"
     )
     if trimmed:
-        click.echo(f"# trimmed: {noise.left_out} stretches left out, beyond 3 standard deviations of the fit")
+        click.echo(
+            f"# trimmed: {noise.left_out} stretches left out, beyond 3 standard deviations of the fit "
+            f"(at least {floor:g} m and rad)"
+        )
     click.echo("[fastslam]")
     click.echo(f"sigmaX = {noise.noise.sigmaX:.4g}          # m per sqrt(m)")
     click.echo(f"sigmaTH = {noise.noise.sigmaTH:.4g}         # rad per sqrt(rad) turned")

@@ -70,13 +70,16 @@ def test_command_prints_fastslam_settings_or_names_the_missing_truth(default_run
     assert result.exit_code != 0 and "no truth sidecar" in result.output
 
 
-def test_command_trimmed_prints_what_it_left_out(default_run):
-    plain = CliRunner().invoke(main, ["odometry-noise", str(default_run.log_path)])
-    trimmed = CliRunner().invoke(main, ["odometry-noise", str(default_run.log_path), "--trimmed"])
-    assert trimmed.exit_code == 0, trimmed.output
-    left_out = int(trimmed.output.split("# trimmed: ")[1].split()[0])
-    stretches = [int(text.output.split(": ")[1].split()[0]) for text in (plain, trimmed)]
-    assert stretches[1] == stretches[0] - left_out
+def test_command_trimmed_prints_the_trimmed_fit_and_what_it_left_out(default_run):
+    from mazeslam.evaluation.odometry_noise import fit_noise_trimmed, stretch_errors
+
+    errors = stretch_errors(log.read(default_run.log_path), sidecars.read_truth(default_run.truth_path)[1])
+    expected = fit_noise_trimmed(errors)  # wheel odometry: no floor
+    result = CliRunner().invoke(main, ["odometry-noise", str(default_run.log_path), "--trimmed"])
+    assert result.exit_code == 0, result.output
+    assert f"# trimmed: {expected.left_out} stretches left out" in result.output
+    assert f"sigmaX = {expected.noise.sigmaX:.4g} " in result.output
+    assert f"sigmaTH_drive = {expected.noise.sigmaTH_drive:.4g} " in result.output
 
 
 def test_laser_odometry_errors_by_hand():
@@ -125,3 +128,26 @@ def test_trimmed_fit_of_clean_errors_is_the_plain_fit_within_its_spread():
     assert trimmed.left_out <= 0.01 * len(errors)
     for name in ("sigmaX", "sigmaTH", "sigmaTH_drive"):
         assert getattr(trimmed.noise, name) == pytest.approx(getattr(plain.noise, name), rel=0.05)
+
+
+def test_trimmed_fit_keeps_still_stretches_whose_error_is_within_the_floor():
+    from mazeslam.evaluation.odometry_noise import fit_noise_trimmed
+
+    rng = np.random.default_rng(7)
+    errors = model_errors(rng, 1000, 0.02, 0.01, 0.004)
+    still = rng.choice(len(errors), 200, replace=False)  # the robot barely moved: 1 mm, no turn
+    errors[still] = np.column_stack(
+        [np.full(200, 0.001), np.zeros(200), rng.normal(0, 0.003, 200), rng.normal(0, 0.003, 200)]
+    )
+    assert fit_noise_trimmed(errors).left_out > 150  # without a floor they are far beyond sqrt(a D)
+    assert fit_noise_trimmed(errors, floor=0.01).left_out < 20  # 3 mm errors are within 3 x 1 cm
+
+
+def test_trimmed_fit_of_nothing_but_outliers_says_so():
+    from mazeslam.evaluation.odometry_noise import fit_noise_trimmed
+
+    errors = np.array([[1.0, 0.0, (-1.0) ** k * 0.01, 0.0] for k in range(20)] + [[1.0, 0.0, 5.0, 0.0]])
+    trimmed = fit_noise_trimmed(errors)  # the first fit's sigmaX is 1.09, and 5 m lies beyond 3 of it
+    assert trimmed.left_out == 1 and trimmed.noise.sigmaX == pytest.approx(0.01)
+    with pytest.raises(ValueError, match="did not settle|nothing is left"):
+        fit_noise_trimmed(errors, sigmas=0.001)

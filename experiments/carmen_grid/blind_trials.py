@@ -4,8 +4,10 @@ settings are kept. Each variant changes one thing:
 - "own fitted noise": orebro's own laser-odometry noise fit (``results/motion_noise.csv``, its row)
   as ``[grid] blind_motion_noise``;
 - "floor 0.05": ``motion_floor`` 0.05 m and rad, the floor before the noise was measured;
-- "search window +-1.5 m": the search at every scan reaches 3.75 of ``every_scan_sigma`` (0.4 m),
-  not 2.5 (1 m); its prior is unchanged;
+- "search window +-1.5 m": the search reaches 3.75 of its standard deviations, not 2.5
+  (``rescue.window_sigmas``): +-1.5 m instead of +-1 m, and +-2.6 rad instead of +-1.75 rad, at
+  every scan (the failed-match search, which shares the setting, does not run on a log without
+  odometry); its prior is unchanged;
 - "search prior 1 m": ``every_scan_sigma`` (1.0 m, 0.7 rad): the window reaches 2.5 m and its
   refinements are chosen under that wider prior.
 

@@ -27,21 +27,18 @@ laser odometry of every log); writes ``results/drift_checks.md``.
 from __future__ import annotations
 
 import itertools
-import tempfile
 from pathlib import Path
 
 import numpy as np
 import pandas as pd
+from run import imported_run  # this folder's run.py
 
 from mazeslam.evaluation.metrics import align_se2, apply_se2
 from mazeslam.filters.scan_matching import laser_odometry
 from mazeslam.geometry import relative, wrap_angle
-from mazeslam.imports.carmen import import_carmen
-from mazeslam.loaded_run import LoadedRun, load_run
 from mazeslam.slam import load_slam_config
 
 HERE = Path(__file__).resolve().parent
-CARMEN = HERE.parents[2] / "shared" / "data" / "carmen"
 RESULTS = HERE / "results"
 CONFIG = HERE.parents[1] / "configs" / "carmen.toml"
 #: A step between consecutive scans this far off the reference's (m, rad) is wrong; up to
@@ -72,19 +69,12 @@ def wrong_steps(estimate: np.ndarray, reference: np.ndarray) -> np.ndarray:
     return np.flatnonzero(off) + 1
 
 
-def load(name: str) -> LoadedRun:
-    with tempfile.TemporaryDirectory() as folder:
-        course = Path(folder) / f"{name}.log"
-        import_carmen(CARMEN / f"{name}-corrected.log.gz", course)
-        return load_run(course)
-
-
 def main() -> None:
     table = pd.read_csv(RESULTS / "table.csv")
     scan_matching = load_slam_config(CONFIG).scan_matching
     seeds, logs = [], []
     for name, rows in table.groupby("log"):
-        run = load(name)
+        run = imported_run(name)
         records = np.flatnonzero(run.log.is_scan)
         reference = run.truth[records]
         paths = []

@@ -6,7 +6,8 @@ by it, fitted interval by interval to the motion model (``mazeslam.evaluation.od
 numbers ``mazeslam odometry-noise LOG --config configs/carmen.toml`` prints), and the median over
 the logs. orebro has no odometry and its intervals are matched blind: its fit is the largest.
 Beside it the trimmed fit (``fit_noise_trimmed``, ``--trimmed``): the same without the intervals
-whose error lies beyond 3 standard deviations of the fit (failed matches), and how many those are.
+whose error lies beyond 3 standard deviations of the fit, at least the matcher's ``prior_floor``
+(0.01 m and rad), and how many those are.
 
     python experiments/carmen_grid/motion_noise.py
 
@@ -29,7 +30,7 @@ def fit_row(name: str) -> dict:
     config = load_slam_config(CONFIG)
     laser = laser_odometry(run.log, run.geometry, config.scan_matching)
     errors = motion_stretch_errors(run.log, run.truth, laser)
-    measured, trimmed = fit_noise(errors), fit_noise_trimmed(errors)
+    measured, trimmed = fit_noise(errors), fit_noise_trimmed(errors, config.scan_matching.prior_floor)
     return {
         "log": name,
         "intervals": measured.stretches,
@@ -54,8 +55,10 @@ def main() -> None:
         "against the reference poses, interval by interval: sigmaX m/sqrt(m), sigmaTH rad/sqrt(rad), "
         "sigmaTH_drive rad/sqrt(m) (mazeslam.evaluation.odometry_noise); the median row gives the grid "
         "filter's default motion noise. trimmed_*: the fit without the intervals beyond 3 standard deviations "
-        "of it (left_out of them, the failed matches; fit_noise_trimmed); their median row gives corner "
-        "FastSLAM's noise in configs/carmen.toml.\n\n" + table.to_markdown(floatfmt=".4g") + "\n"
+        "of it, at least the matcher's prior_floor (left_out of them, the failed matches; fit_noise_trimmed); "
+        "their median row gives corner FastSLAM's noise in configs/carmen.toml.\n\n"
+        + table.to_markdown(floatfmt=".4g")
+        + "\n"
     )
     (RESULTS / "motion_noise.md").write_text(text)
     print(text)

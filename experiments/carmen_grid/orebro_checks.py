@@ -33,11 +33,11 @@ Run: ``python experiments/carmen_grid/orebro_checks.py`` (about 10 CPU minutes);
 
 from __future__ import annotations
 
-import tempfile
 from pathlib import Path
 
 import numpy as np
 import pandas as pd
+from run import imported_run  # this folder's run.py
 
 from mazeslam.evaluation.metrics import absolute_trajectory_error
 from mazeslam.filters.correlative import CorrelativeParams, LikelihoodGrid, correlative_candidates
@@ -46,10 +46,8 @@ from mazeslam.geometry import compose, relative, transform_points, wrap_angle
 from mazeslam.grid.filter import ScanSensor
 from mazeslam.grid.matching import LikelihoodField, MatchParams, match_points, refine_pose
 from mazeslam.grid.occupancy import GridParams, TiledGrid, integrate_scan, scan_rays
-from mazeslam.imports.carmen import import_carmen
-from mazeslam.loaded_run import LoadedRun, load_run
+from mazeslam.loaded_run import LoadedRun
 
-CARMEN = Path(__file__).resolve().parents[3] / "shared" / "data" / "carmen"
 RESULTS = Path(__file__).resolve().parent / "results"
 #: The prior of the wide search around the laser odometry's prediction: sigma (m, m, rad).
 SEARCH_SIGMA = np.array([1.0, 1.0, 0.3])
@@ -84,10 +82,7 @@ class UnknownAwareField(LikelihoodField):
 
 
 def load_orebro() -> LoadedRun:
-    with tempfile.TemporaryDirectory() as folder:
-        course = Path(folder) / "orebro.log"
-        import_carmen(CARMEN / "orebro-corrected.log.gz", course)
-        return load_run(course)
+    return imported_run("orebro")
 
 
 def beam_model_rows(run: LoadedRun, reference: np.ndarray, ranges: np.ndarray) -> list[dict]:

@@ -13,7 +13,7 @@ the scan match's correction of the motion against the motion noise, consistent n
 
 Writes the CSV and, beside it, a Markdown table of the same name (quoted by docs/grid.md).
 ``--motion-noise`` replaces the config's ``[grid] motion_noise`` (``results/simulated_building_trimmed_noise.csv``:
-the trimmed fit of results/motion_noise.md, 0.026 0.0073 0.0047). Run with
+the trimmed fit of results/motion_noise.md, 0.028 0.0086 0.0062). Run with
 ``PYTHONPATH`` set to a checkout of earlier code to measure that code the same way
 (``results/simulated_building_before.csv``: commit 5651635, before the first motion was drawn with
 noise and the motion noise measured; it reported no motion NIS).

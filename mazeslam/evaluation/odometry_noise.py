@@ -21,8 +21,10 @@ between scans (``laser_stretch_errors``): D and T are then the interval's matche
 
 A few failed scan matches (metres or a right angle off) pull a least-squares fit far above the
 error of a typical interval. ``fit_noise_trimmed`` fits again without the stretches whose error
-lies beyond ``OUTLIER_SIGMAS`` standard deviations of the fit, until none is left out anew: the
-noise of the matches that work, with the failures counted apart (``MeasuredOdometryNoise.left_out``).
+lies beyond ``OUTLIER_SIGMAS`` standard deviations of the fit (with a floor on the standard
+deviation, so that a stretch of almost no motion is not an outlier for an error of millimetres),
+until none is left out anew: the noise of the matches that work, with the failures counted apart
+(``MeasuredOdometryNoise.left_out``).
 """
 
 from __future__ import annotations
@@ -151,23 +153,29 @@ def fit_noise(errors: np.ndarray) -> MeasuredOdometryNoise:
     return MeasuredOdometryNoise(noise, len(errors), float(moved.sum()), float(turned.sum()))
 
 
-def fit_noise_trimmed(errors: np.ndarray, sigmas: float = OUTLIER_SIGMAS, rounds: int = 50) -> MeasuredOdometryNoise:
+def fit_noise_trimmed(
+    errors: np.ndarray, floor: float = 0.0, sigmas: float = OUTLIER_SIGMAS, rounds: int = 50
+) -> MeasuredOdometryNoise:
     """``fit_noise`` of the stretch errors (K, 4) ``[D, T, e_along, e_theta]`` without their outliers:
     fit, leave out every stretch whose along-track or heading error lies beyond ``sigmas`` standard
-    deviations of that fit (its variance ``a D + b T``, the least-squares coefficients), fit the rest,
-    and so on until the stretches left out stop changing (at most ``rounds`` fits). Stretches, distance
-    and turn are the kept ones'; ``left_out`` counts the others."""
+    deviations of that fit (its variance ``a D + b T``, the least-squares coefficients, plus
+    ``floor``^2: the smallest standard deviation, m and rad, an error is measured against; for
+    laser odometry its matcher's ``prior_floor``), fit the rest, and so on until the stretches left
+    out stop changing. Stretches, distance and turn are the kept ones'; ``left_out`` counts the
+    others. Raises ValueError when ``rounds`` fits do not settle or nothing is left to fit."""
     kept = np.ones(len(errors), dtype=bool)
     for _ in range(rounds):
+        if not kept.any():
+            raise ValueError("every stretch lies beyond the fit's spread: nothing is left to fit")
         along_coefficients, heading_coefficients = _variance_coefficients(errors[kept])
         motion = errors[:, :2]
-        inside = (errors[:, 2] ** 2 <= sigmas**2 * (motion @ along_coefficients)) & (
-            errors[:, 3] ** 2 <= sigmas**2 * (motion @ heading_coefficients)
+        inside = (errors[:, 2] ** 2 <= sigmas**2 * (motion @ along_coefficients + floor**2)) & (
+            errors[:, 3] ** 2 <= sigmas**2 * (motion @ heading_coefficients + floor**2)
         )
         if (inside == kept).all():
-            break
+            return replace(fit_noise(errors[kept]), left_out=int((~kept).sum()))
         kept = inside
-    return replace(fit_noise(errors[kept]), left_out=int((~kept).sum()))
+    raise ValueError(f"the trimmed fit did not settle in {rounds} fits")
 
 
 def _variance_coefficients(errors: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
