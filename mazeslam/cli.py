@@ -630,7 +630,12 @@ def calibrate(log_files, config_path, write_path, first_beam_angle, beam_directi
 )
 def odometry_noise(log_file, config_path, trimmed):
     """Measure a log's odometry noise against its truth sidecar, as [fastslam] settings."""
-    from mazeslam.evaluation.odometry_noise import fit_noise, fit_noise_trimmed, motion_stretch_errors
+    from mazeslam.evaluation.odometry_noise import (
+        OUTLIER_SIGMAS,
+        fit_noise,
+        fit_noise_trimmed,
+        motion_stretch_errors,
+    )
     from mazeslam.filters.scan_matching import laser_odometry
     from mazeslam.loaded_run import load_run
     from mazeslam.slam import load_slam_config
@@ -656,7 +661,7 @@ def odometry_noise(log_file, config_path, trimmed):
     )
     if trimmed:
         click.echo(
-            f"# trimmed: {noise.left_out} stretches left out, beyond 3 standard deviations of the fit "
+            f"# trimmed: {noise.left_out} stretches left out, beyond {OUTLIER_SIGMAS:g} standard deviations of the fit "
             f"(at least {floor:g} m and rad)"
         )
     click.echo("[fastslam]")

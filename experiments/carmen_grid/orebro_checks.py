@@ -81,10 +81,6 @@ class UnknownAwareField(LikelihoodField):
         return params.scale * np.log(likelihood + params.floor).sum(axis=-1)
 
 
-def load_orebro() -> LoadedRun:
-    return imported_run("orebro")
-
-
 def beam_model_rows(run: LoadedRun, reference: np.ndarray, ranges: np.ndarray) -> list[dict]:
     """Check 1: the overlay's median gap (m) for each model variant."""
     from scipy.spatial import cKDTree
@@ -196,10 +192,10 @@ def neighbour_rows(
     sensor, match = ScanSensor.of(run.geometry, ranges.shape[1]), MatchParams()
     points = [match_points(scan, sensor.bearings, sensor.mount, match) for scan in ranges]
 
-    def share(k: int, pose: np.ndarray, others: range) -> float:
+    def shares(k: int, poses: tuple[np.ndarray, ...], others: range) -> list[float]:
+        """For each of ``poses`` (3,) of scan k: the share of its end points near those of ``others``."""
         tree = cKDTree(np.vstack([transform_points(reference[j], points[j]) for j in others]))
-        distance, _ = tree.query(transform_points(pose, points[k]))
-        return float(np.mean(distance < NEIGHBOUR_GAP))
+        return [float(np.mean(tree.query(transform_points(pose, points[k]))[0] < NEIGHBOUR_GAP)) for pose in poses]
 
     rows, ties = [], []
     for k in range(1, len(ranges)):
@@ -211,8 +207,9 @@ def neighbour_rows(
         row = {"scan": k, "laser odometry's pose from the reference's [m, m, rad]": np.round(offset, 2).tolist()}
         for name, others in (("past", past), ("future", future)):
             if len(others):
-                row[f"{name}: at reference"] = share(k, reference[k], others)
-                row[f"{name}: at laser odometry"] = share(k, laser, others)
+                row[f"{name}: at reference"], row[f"{name}: at laser odometry"] = shares(
+                    k, (reference[k], laser), others
+                )
         rows.append(row)
         if row["past: at laser odometry"] >= row["past: at reference"] - TIE:
             ties.append(k)
@@ -229,7 +226,7 @@ def ambiguity_floor(reference: np.ndarray, increments: np.ndarray, scans: list[i
 
 
 def main() -> None:
-    run = load_orebro()
+    run = imported_run("orebro")
     records = np.flatnonzero(run.log.is_scan)
     reference, ranges = run.truth[records], run.log.values[records]
     increments = laser_odometry(run.log, run.geometry, ScanMatchParams(enabled=True)).increments

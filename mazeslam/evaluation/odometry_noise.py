@@ -163,12 +163,11 @@ def fit_noise_trimmed(
     laser odometry its matcher's ``prior_floor``), fit the rest, and so on until the stretches left
     out stop changing. Stretches, distance and turn are the kept ones'; ``left_out`` counts the
     others. Raises ValueError when ``rounds`` fits do not settle or nothing is left to fit."""
-    kept = np.ones(len(errors), dtype=bool)
+    motion, kept = errors[:, :2], np.ones(len(errors), dtype=bool)
     for _ in range(rounds):
         if not kept.any():
             raise ValueError("every stretch lies beyond the fit's spread: nothing is left to fit")
         along_coefficients, heading_coefficients = _variance_coefficients(errors[kept])
-        motion = errors[:, :2]
         inside = (errors[:, 2] ** 2 <= sigmas**2 * (motion @ along_coefficients + floor**2)) & (
             errors[:, 3] ** 2 <= sigmas**2 * (motion @ heading_coefficients + floor**2)
         )
