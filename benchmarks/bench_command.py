@@ -6,10 +6,10 @@
    and the figure). Its wall clock (best and median of ``REPEATS`` runs) and its CPU time (the
    child processes' user + system time, ``resource.getrusage(RUSAGE_CHILDREN)``: on a machine
    shared with other work the wall clock also counts the time others hold the cores), over the
-   filter's own time (``slam_on_run`` in this process, best of ``REPEATS``; the ratio is CPU time over
+   filter's own time (``run_slam`` in this process, best of ``REPEATS``; the ratio is CPU time over
    CPU time with ``--cpu-time`` or ``MAZESLAM_BENCH_CLOCK=cpu``). Target: the command under 1 s of
    wall clock.
-2. The filter's real-time factor, the log's robot time over the filter's time (``slam_on_run``,
+2. The filter's real-time factor, the log's robot time over the filter's time (``run_slam``,
    corner extraction included, best of ``REPEATS``), on that simulated log and on the exercise's own
    course log ``../shared/data/course/log1.txt`` (beam convention detected, as the command does;
    skipped, saying so, when the file is absent), per wall-clock second or, with ``--cpu-time``, per
@@ -38,9 +38,9 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 from bench_env import clock, clock_name, uses_cpu_time  # noqa: E402  (one clock for the benchmarks)
 
 from mazeslam import simulate  # noqa: E402
-from mazeslam.beam_detection import with_detected_convention  # noqa: E402
-from mazeslam.loaded_run import LoadedRun, load_run  # noqa: E402
-from mazeslam.slam import SlamConfig, slam_on_run  # noqa: E402
+from mazeslam.data.beam_detection import with_detected_convention  # noqa: E402
+from mazeslam.data.loaded_run import LoadedRun, load_run  # noqa: E402
+from mazeslam.pipeline import SlamConfig, run_slam  # noqa: E402
 
 PARTICLES = 1000
 #: Seconds of robot time simulated: odometry at 5 Hz and a scan every 0.75 s make about 130 records.
@@ -75,7 +75,7 @@ def time_command(log_path: Path, out_dir: Path, repeats: int = REPEATS) -> dict:
 
 
 def time_filter(run: LoadedRun, repeats: int = REPEATS) -> float:
-    """The best seconds (``clock``: wall clock, or CPU time) of ``slam_on_run`` over ``run`` at
+    """The best seconds (``clock``: wall clock, or CPU time) of ``run_slam`` over ``run`` at
     ``PARTICLES`` particles (the filter the command runs, corner extraction included)."""
     config = SlamConfig()
     config = dataclasses.replace(config, fastslam=dataclasses.replace(config.fastslam, NPARTICLES=PARTICLES))
@@ -83,7 +83,7 @@ def time_filter(run: LoadedRun, repeats: int = REPEATS) -> float:
     seconds = []
     for _ in range(repeats):
         began = clock()
-        slam_on_run(run, config, progress=False)
+        run_slam(run, config, progress=False)
         seconds.append(clock() - began)
     return min(seconds)
 

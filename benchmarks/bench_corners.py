@@ -17,10 +17,11 @@ from pathlib import Path
 
 import pandas as pd
 
-from mazeslam import log, sidecars, simulate
-from mazeslam.envs.simulator import MazeParams, SimulationConfig
+from mazeslam import simulate
+from mazeslam.data import log, sidecars
 from mazeslam.evaluation.corner_quality import evaluate_log
-from mazeslam.filters.corners import CornerExtractor, CornerParams
+from mazeslam.features.corners import CornerExtractor, CornerParams
+from mazeslam.sim.simulator import MazeParams, SimulationConfig
 
 TARGET_SCANS_PER_SECOND = 2000.0
 NOISE_LEVELS = (0.0, 0.003, 0.006, 0.01, 0.02)

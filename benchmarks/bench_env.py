@@ -25,7 +25,7 @@ import gymnasium as gym
 import numpy as np
 
 import mazeslam  # noqa: F401  (registers the environments)
-from mazeslam.envs.maze import generate_maze
+from mazeslam.sim.maze import generate_maze
 
 ROWS = COLS = 16
 STEPS = 1000
@@ -103,7 +103,7 @@ def irsim_rate(maze, steps: int = 300) -> float:
     os.environ.setdefault("MPLBACKEND", "Agg")
     import irsim
 
-    from mazeslam.envs.walls import wall_geometry
+    from mazeslam.sim.walls import wall_geometry
 
     obstacles = "\n".join(
         f"  - shape: {{name: 'polygon', vertices: [[{a}, {b}], [{c}, {b}], [{c}, {d}], [{a}, {d}]]}}\n"

@@ -1,7 +1,7 @@
 """Benchmark: FastSLAM against its baselines, each timed in the same run (issues 4 and 18).
 
 1. Loop oracle: predict + update at 1000 particles over the first 40 scans of the default run,
-   the vectorised filter against the per-particle loop ``tests/reference_fastslam.py`` (FastSLAM
+   the vectorised filter against the per-particle loop ``tests/fastslam/reference_fastslam.py`` (FastSLAM
    1.0, the oracle's algorithm). Target: at least 100x.
 2. Map size: the filter's time per particle and observation at 1000 particles on the full 16x16
    tour (``mazeslam simulate --rows 16 --cols 16 --seed 3``: about 300 corners) over that on the
@@ -34,18 +34,19 @@ import tempfile
 from collections.abc import Iterator
 from pathlib import Path
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests" / "fastslam"))
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 from bench_env import clock, clock_name, uses_cpu_time  # noqa: E402  (one clock for the benchmarks that offer CPU time)
 from reference_fastslam import LoopFastSLAM  # noqa: E402
 
-from mazeslam import log, simulate  # noqa: E402
-from mazeslam.envs.simulator import SimulationConfig  # noqa: E402
-from mazeslam.filters.corners import CornerExtractor  # noqa: E402
-from mazeslam.filters.fastslam import FastSLAM, FastSLAMParams  # noqa: E402
-from mazeslam.loaded_run import LoadedRun, load_run  # noqa: E402
-from mazeslam.slam import run_fastslam  # noqa: E402
+from mazeslam import simulate  # noqa: E402
+from mazeslam.data import log
+from mazeslam.data.loaded_run import LoadedRun, load_run  # noqa: E402
+from mazeslam.fastslam.filter import FastSLAM, FastSLAMParams  # noqa: E402
+from mazeslam.features.corners import CornerExtractor  # noqa: E402
+from mazeslam.pipeline.fastslam_run import run_fastslam  # noqa: E402
+from mazeslam.sim.simulator import SimulationConfig  # noqa: E402
 
 PARTICLES = 1000
 MANY_PARTICLES = 10_000

@@ -1,9 +1,10 @@
-"""Benchmark: the grid filter (mazeslam.grid) with 30 particles on one core, against real time.
+"""Benchmark: the grid filter (mazeslam.gridslam) with 30 particles on one core, against real time.
 
-The CARMEN log aces (shared/data/carmen): the log's own duration over the filter's wall-clock time
-(laser odometry included), target faster than real time (ratio >= 1), and the process's peak memory
-(MB). Skipped when the shared data is absent. The simulated ring building (mazeslam.grid.synthetic)
-is timed too: scans per second, as it has no real clock to compare with.
+The CARMEN log aces (shared/data/carmen) with configs/carmen.toml, through ``run_slam`` as the slam
+command runs it: the log's own duration over the filter's wall-clock time (laser odometry
+included), target faster than real time (ratio >= 1), and the process's peak memory (MB). Skipped
+when the shared data is absent. The simulated ring building (mazeslam.sim.building) is timed
+too: scans per second, as it has no real clock to compare with.
 Run: ``python benchmarks/bench_grid.py``.
 """
 
@@ -16,13 +17,16 @@ from pathlib import Path
 
 import pandas as pd
 
-from mazeslam.grid import GridSlamParams, run_grid_slam
-from mazeslam.grid.synthetic import simulate_building_log
-from mazeslam.imports.carmen import import_carmen
-from mazeslam.loaded_run import load_run
-from mazeslam.log import read
+from mazeslam.core.config import with_settings
+from mazeslam.data.carmen import import_carmen
+from mazeslam.data.loaded_run import load_run
+from mazeslam.data.log import read
+from mazeslam.gridslam import GridSlamParams, run_grid_slam
+from mazeslam.pipeline import load_slam_config, run_slam
+from mazeslam.sim.building import simulate_building_log
 
 CARMEN = Path(__file__).resolve().parents[2] / "shared" / "data" / "carmen"
+CONFIGS = Path(__file__).resolve().parents[1] / "configs"
 PARTICLES = 30
 TARGET_REAL_TIME = 1.0
 TARGET_PEAK_MB = 500.0
@@ -45,14 +49,9 @@ def aces_rows(folder: Path) -> list[dict]:
         return []
     import_carmen(CARMEN / "aces-corrected.log.gz", folder / "aces.log")
     run = load_run(folder / "aces.log")
+    config = with_settings(load_slam_config(CONFIGS / "carmen.toml"), {"grid.particles": PARTICLES})
     began = time.perf_counter()
-    run_grid_slam(
-        run.log,
-        run.geometry,
-        run.start_pose,
-        GridSlamParams(particles=PARTICLES),
-        sensor_max_range=run.sensor_max_range,
-    )
+    run_slam(run, config, progress=False)  # what `mazeslam slam aces.log --config configs/carmen.toml` runs
     factor = run.log.duration / (time.perf_counter() - began)
     peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
     return [

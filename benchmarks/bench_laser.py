@@ -12,9 +12,9 @@ import time
 import numpy as np
 import pymunk
 
-from mazeslam.envs.laser import LaserParams, VirtualLaser
-from mazeslam.envs.maze import generate_maze
-from mazeslam.envs.walls import wall_geometry
+from mazeslam.sim.laser import LaserParams, VirtualLaser
+from mazeslam.sim.maze import generate_maze
+from mazeslam.sim.walls import wall_geometry
 
 TARGET_SPEEDUP = 5.0
 

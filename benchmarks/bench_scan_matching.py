@@ -15,10 +15,10 @@ from pathlib import Path
 
 import pandas as pd
 
-from mazeslam import log
-from mazeslam.filters.scan_matching import ScanMatchParams, laser_odometry
-from mazeslam.imports.carmen import import_carmen
-from mazeslam.loaded_run import load_run
+from mazeslam.data import log
+from mazeslam.data.carmen import import_carmen
+from mazeslam.data.loaded_run import load_run
+from mazeslam.registration.scan_matching import ScanMatchParams, laser_odometry
 
 CARMEN = Path(__file__).resolve().parents[2] / "shared" / "data" / "carmen"
 TARGET_REAL_TIME = 100.0

@@ -14,7 +14,7 @@ import time
 from pathlib import Path
 
 from mazeslam import simulate
-from mazeslam.envs.simulator import MazeParams, SimulationConfig
+from mazeslam.sim.simulator import MazeParams, SimulationConfig
 
 TARGET_REAL_TIME_FACTOR = 200.0
 

@@ -30,7 +30,7 @@ import time
 from collections.abc import Iterator
 from pathlib import Path
 
-from mazeslam.evaluation.sweep import load_sweep, run_sweep
+from mazeslam.sweeps.runner import load_sweep, run_sweep
 
 GRID = Path(__file__).resolve().parents[1] / "configs" / "sweeps" / "core_grid.toml"
 TARGET_SECONDS = 15 * 60
@@ -65,7 +65,7 @@ def schedule_bound(workers: int = 2, count: int = SUBSET_RUNS) -> Iterator[dict]
     pool's order): one row per phase, then the whole sweep's tasks over that makespan."""
     import scipy.optimize  # noqa: F401  (loaded before the tasks, as the sweep's process does before forking)
 
-    from mazeslam.evaluation import sweep as sweeps
+    from mazeslam.sweeps import runner as sweeps
 
     subset = _subset(load_sweep(GRID), count)
     runs = sorted(subset.runs(), key=lambda run: -sweeps.configure(subset, run["settings"])[1].fastslam.NPARTICLES)

@@ -17,7 +17,7 @@ import gymnasium as gym
 from bench_env import IRSIM_VERSION, clock, clock_name, irsim_comparison, mazeslam_rate
 
 import mazeslam  # noqa: F401  (registers the environments)
-from mazeslam.envs.maze import generate_maze
+from mazeslam.sim.maze import generate_maze
 
 ROWS = COLS = 16
 SIZES = (1, 8, 64, 256)

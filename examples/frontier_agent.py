@@ -5,7 +5,7 @@ At each cell centre it looks along the four grid directions: a beam that reaches
 the cell's edge means an opening. Known openings form a graph of cells; the frontier is the
 openings' far cells not yet visited; the agent drives (breadth-first shortest path over known
 openings) to the nearest one. It localises by the true pose in ``info`` (swap in
-``info["slam"]["pose"]`` from ``mazeslam.online_slam.OnlineFastSLAM`` for an agent that only
+``info["slam"]["pose"]`` from ``mazeslam.envs.online_slam.OnlineFastSLAM`` for an agent that only
 trusts itself).
 With ``--record`` the episode is written as a course log with truth and map sidecars:
 
@@ -23,8 +23,8 @@ import gymnasium as gym
 import numpy as np
 
 import mazeslam  # noqa: F401  (registers the environments)
-from mazeslam.envs.policies import DriveParams, steer_to
 from mazeslam.envs.wrappers import RecordCourseLog
+from mazeslam.sim.policies import DriveParams, steer_to
 
 DIRECTIONS = {(0, 1): 0.0, (1, 0): np.pi / 2, (0, -1): np.pi, (-1, 0): -np.pi / 2}  # (d_row, d_col): world angle
 

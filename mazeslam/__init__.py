@@ -2,7 +2,7 @@
 
 The stages (see docs/architecture.md): simulate a maze run or record a real one -> a course log (+
 truth and map sidecars) -> corners -> FastSLAM -> metrics. Start with ``mazeslam.simulate`` and
-``mazeslam.log.read``.
+``mazeslam.data.log.read``.
 
 The package registers the Gymnasium environment ``mazeslam/Maze-v0`` (truncated after
 ``MAX_EPISODE_STEPS``; its vector entry point ``make_vector_env``: ``mazeslam.envs.vector_env.MazeVectorEnv``,
@@ -71,9 +71,9 @@ elif not any(isinstance(finder, _RegisterWithGymnasium) for finder in sys.meta_p
 
 
 def __getattr__(name: str):
-    """``simulate`` and ``SimulationConfig`` from ``mazeslam.envs.simulator``, imported on first use."""
+    """``simulate`` and ``SimulationConfig`` from ``mazeslam.sim.simulator``, imported on first use."""
     if name in __all__:
-        from mazeslam.envs import simulator
+        from mazeslam.sim import simulator
 
         return getattr(simulator, name)
     raise AttributeError(f"module 'mazeslam' has no attribute {name!r}")

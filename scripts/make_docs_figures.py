@@ -41,21 +41,21 @@ SLOW_MINUTES = 3.0
 # fmt: off
 FIGURES: list[tuple[str, str, str, float]] = [
     ("corners_simulated", "docs/img/corners_simulated.png", "mazeslam simulate --seed 0 --out {tmp}/doc.log --quiet; mazeslam corners {tmp}/doc.log --scan 60 --plot docs/img/corners_simulated.png", 0.3),  # noqa: E501
-    ("corners_csail", "docs/img/corners_csail.png", "mazeslam corners {carmen}/csail-corrected.log.gz --config configs/corners/carmen.toml --scan 254 --plot docs/img/corners_csail.png", 0.2),  # noqa: E501
-    ("corners_freiburg079", "docs/img/corners_freiburg079.png", "mazeslam corners {carmen}/freiburg-079-corrected.log.gz --config configs/corners/carmen.toml --scan 2926 --plot docs/img/corners_freiburg079.png", 0.3),  # noqa: E501
-    ("fastslam_default_maze", "docs/img/fastslam_default_maze.png experiments/fastslam_default_maze.csv experiments/fastslam_default_maze.md", "python experiments/fastslam_default_maze.py", 2.0),  # noqa: E501
-    ("mrclam", "docs/img/mrclam_robot1_unknown.png docs/img/mrclam_robot1_nees.png experiments/mrclam/results.md", "python experiments/mrclam/run.py", 2.0),  # noqa: E501
+    ("corners_csail", "docs/img/corners_csail.png", "mazeslam corners {carmen}/csail-corrected.log.gz --config configs/carmen.toml --scan 254 --plot docs/img/corners_csail.png", 0.2),  # noqa: E501
+    ("corners_freiburg079", "docs/img/corners_freiburg079.png", "mazeslam corners {carmen}/freiburg-079-corrected.log.gz --config configs/carmen.toml --scan 2926 --plot docs/img/corners_freiburg079.png", 0.3),  # noqa: E501
+    ("fastslam_default_maze", "docs/img/fastslam_default_maze.png experiments/fastslam_default_maze/results.csv experiments/fastslam_default_maze/results.md", "python -m experiments.fastslam_default_maze.run", 2.0),  # noqa: E501
+    ("mrclam", "docs/img/mrclam_robot1_unknown.png docs/img/mrclam_robot1_nees.png experiments/mrclam/results.md", "python -m experiments.mrclam.run", 2.0),  # noqa: E501
     ("maze_env", "docs/img/maze_env.png", "python scripts/figures/maze_env.py", 0.3),
     ("vector_env_coverage", "docs/img/vector_env_coverage.png", "python examples/train_vector_explorer.py --figure docs/img/vector_env_coverage.png", 5.0),  # noqa: E501
-    ("carmen", "docs/img/carmen/*.png experiments/carmen/results/table.md", "python experiments/carmen/run.py", 15.0),  # noqa: E501
+    ("carmen", "docs/img/carmen/*.png experiments/carmen/results/table.md", "python -m experiments.carmen.run", 15.0),  # noqa: E501
     # experiments/
     ("smooth_404", "experiments/smoother/smooth_404.png", "mazeslam simulate --seed 404 --out {tmp}/s404.log --quiet; mazeslam smooth {tmp}/s404.log --out {tmp}/smooth; copy {tmp}/smooth/smooth.png experiments/smoother/smooth_404.png", 0.5),  # noqa: E501
-    ("blind_cloud", "experiments/blind_cloud/results/*/*.png experiments/blind_cloud/results/*/*.json experiments/blind_cloud/results/*/*.csv", "python experiments/blind_cloud/run.py", 0.5),  # noqa: E501
-    ("consistency", "experiments/consistency/nees_over_time.png experiments/consistency/results.csv experiments/consistency/summary.md", "python experiments/consistency/run.py", 20.0),  # noqa: E501
-    ("consistency_held_out", "experiments/consistency/held_out/nees_over_time.png experiments/consistency/held_out/results.csv experiments/consistency/held_out/summary.md", "python experiments/consistency/run.py --seeds 21 22 23 24 25 26 27 28 29 30 31 32 33 34 35 36 37 38 39 40 --particles 100 1000 --versions 2 --out experiments/consistency/held_out", 15.0),  # noqa: E501
-    ("carmen_grid", "experiments/carmen_grid/results/*_compare.png", "python experiments/carmen_grid/figures.py", 0.2),  # noqa: E501
-    ("course_robot_sensor", "experiments/course_robot/sensor_comparison.png", "python experiments/course_robot/sensor_comparison.py", 1.0),  # noqa: E501
-    ("course_robot_maps", "docs/img/course_log1_maps.png docs/img/course_sim_maps.png", "python experiments/course_robot/figures.py", 3.0),  # noqa: E501
+    ("blind_cloud", "experiments/blind_cloud/results/*/*.png experiments/blind_cloud/results/*/*.json experiments/blind_cloud/results/*/*.csv", "python -m experiments.blind_cloud.run", 0.5),  # noqa: E501
+    ("consistency", "experiments/consistency/nees_over_time.png experiments/consistency/results.csv experiments/consistency/summary.md", "python -m experiments.consistency.run", 20.0),  # noqa: E501
+    ("consistency_held_out", "experiments/consistency/held_out/nees_over_time.png experiments/consistency/held_out/results.csv experiments/consistency/held_out/summary.md", "python -m experiments.consistency.run --seeds 21 22 23 24 25 26 27 28 29 30 31 32 33 34 35 36 37 38 39 40 --particles 100 1000 --versions 2 --out experiments/consistency/held_out", 15.0),  # noqa: E501
+    ("carmen_grid", "experiments/carmen_grid/results/*_compare.png", "python -m experiments.carmen_grid.figures", 0.2),  # noqa: E501
+    ("course_robot_sensor", "experiments/course_robot/sensor_comparison.png", "python -m experiments.course_robot.sensor_comparison", 1.0),  # noqa: E501
+    ("course_robot_maps", "docs/img/course_log1_maps.png docs/img/course_sim_maps.png", "python -m experiments.course_robot.figures", 3.0),  # noqa: E501
     ("maps_particles", "experiments/particles/results/*.png", "mazeslam report experiments/particles/results", 0.1),  # noqa: E501
     ("maps_odometry_variance", "experiments/odometry_variance/results/*.png", "mazeslam report experiments/odometry_variance/results", 0.1),  # noqa: E501
     ("maps_sensor_variance", "experiments/sensor_variance/results/*.png", "mazeslam report experiments/sensor_variance/results", 0.1),  # noqa: E501

@@ -5,7 +5,7 @@ import sys
 
 from conftest import PROJECT_ROOT
 
-#: Modules that ``import mazeslam, mazeslam.log`` must not load.
+#: Modules that ``import mazeslam, mazeslam.data.log`` must not load.
 HEAVY = ("pymunk", "gymnasium", "matplotlib", "pandas", "cv2", "scipy", "tqdm")
 
 
@@ -17,7 +17,7 @@ def run_python(code: str) -> str:
 
 
 def test_importing_mazeslam_and_its_log_reader_loads_nothing_heavy():
-    printed = run_python(f"import sys, mazeslam, mazeslam.log; print(*[m for m in {HEAVY!r} if m in sys.modules])")
+    printed = run_python(f"import sys, mazeslam, mazeslam.data.log; print(*[m for m in {HEAVY!r} if m in sys.modules])")
     assert printed.split() == []
 
 
@@ -28,7 +28,7 @@ def test_the_simulator_and_the_environment_are_there_on_first_use():
         "observation, info = env.reset(seed=0)\n"
         "print(observation['scan'].shape, mazeslam.simulate.__module__, mazeslam.SimulationConfig().laser.beams)\n"
     )
-    assert printed.split() == ["(180,)", "mazeslam.envs.simulator", "180"]
+    assert printed.split() == ["(180,)", "mazeslam.sim.simulator", "180"]
 
 
 def test_the_environment_is_registered_whichever_is_imported_first():

@@ -6,7 +6,7 @@ import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
 
-from mazeslam.envs.simulator import SimulationConfig
+from mazeslam.sim.simulator import SimulationConfig
 
 
 class DriveEnv(gym.Env):

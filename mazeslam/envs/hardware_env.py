@@ -7,8 +7,8 @@ import time
 import numpy as np
 
 from mazeslam.envs.drive_env import DriveEnv
-from mazeslam.envs.simulator import SimulationConfig
 from mazeslam.robot.interface import Robot
+from mazeslam.sim.simulator import SimulationConfig
 
 
 class HardwareMazeEnv(DriveEnv):

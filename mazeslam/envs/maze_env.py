@@ -7,12 +7,12 @@ import math
 import gymnasium as gym
 import numpy as np
 
+from mazeslam.core.geometry import transform_points
 from mazeslam.envs.drive_env import DriveEnv
-from mazeslam.envs.maze import Maze, generate_maze, load_maze
-from mazeslam.envs.simulated_robot import SimulatedRobot
-from mazeslam.envs.simulator import MazeParams, SimulationConfig
-from mazeslam.envs.walls import WallsInSight
-from mazeslam.geometry import transform_points
+from mazeslam.robot.simulated import SimulatedRobot
+from mazeslam.sim.maze import Maze, generate_maze, load_maze
+from mazeslam.sim.simulator import MazeParams, SimulationConfig
+from mazeslam.sim.walls import WallsInSight
 
 #: Spacing (m) of the points along the walls that count as seen once a beam lands near them.
 WALL_SAMPLE_SPACING = 0.01

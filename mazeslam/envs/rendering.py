@@ -10,7 +10,7 @@ import numpy as np  # noqa: E402
 from matplotlib.backends.backend_agg import FigureCanvasAgg  # noqa: E402
 from matplotlib.patches import Circle, Rectangle  # noqa: E402
 
-from mazeslam.geometry import transform_points  # noqa: E402
+from mazeslam.core.geometry import transform_points  # noqa: E402
 
 
 def draw_maze_env(env, slam: dict | None = None, size_pixels: int = 480) -> np.ndarray:

@@ -2,7 +2,7 @@
 
     envs = gym.make_vec("mazeslam/Maze-v0", num_envs=64, vectorization_mode="vector_entry_point")
 
-Its physics is batched numpy (``mazeslam.envs.batched``), not pymunk: every robot's
+Its physics is batched numpy (``mazeslam.sim.batched``), not pymunk: every robot's
 differential-drive kinematics is integrated at once, the discs are pushed out of the walls they
 touch, and one ray cast serves every robot's beams. So an env's episode here differs from the
 pymunk-backed ``MazeEnv``'s with the same seed after the start (same maze and start pose, as both
@@ -21,13 +21,13 @@ from gymnasium.utils import seeding
 from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space
 
-from mazeslam.envs.batched import MazeGrids, slide
+from mazeslam.core.geometry import wrap_angle
 from mazeslam.envs.drive_env import DriveEnv
-from mazeslam.envs.maze import Maze
 from mazeslam.envs.maze_env import WALL_SAMPLE_SPACING, choose_maze, draw_start_pose
-from mazeslam.envs.simulator import SimulationConfig
-from mazeslam.envs.walls import WallGeometry, wall_geometry
-from mazeslam.geometry import wrap_angle
+from mazeslam.sim.batched import MazeGrids, slide
+from mazeslam.sim.maze import Maze
+from mazeslam.sim.simulator import SimulationConfig
+from mazeslam.sim.walls import WallGeometry, wall_geometry
 
 #: Steps of random draws an env takes from its generator at a time (``MazeVectorEnv._draw``).
 DRAW_AHEAD = 32

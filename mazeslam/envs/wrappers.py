@@ -1,6 +1,6 @@
 """Wrappers for ``mazeslam/Maze-v0``: record episodes as course logs, of the single env
 (``RecordCourseLog``) or of every env of its vector env (``RecordVectorCourseLogs``); FastSLAM
-online: ``mazeslam.online_slam``."""
+online: ``mazeslam.envs.online_slam``."""
 
 from __future__ import annotations
 
@@ -10,9 +10,9 @@ from typing import TYPE_CHECKING
 import gymnasium as gym
 import numpy as np
 
-from mazeslam import sidecars
-from mazeslam.config import to_mapping
-from mazeslam.log import LogWriter
+from mazeslam.core.config import to_mapping
+from mazeslam.data import sidecars
+from mazeslam.data.log import LogWriter
 
 if TYPE_CHECKING:
     from mazeslam.envs.vector_env import MazeVectorEnv

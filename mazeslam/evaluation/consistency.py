@@ -23,13 +23,21 @@ if TYPE_CHECKING:
 POSE_BOUND_95 = 7.814727903251179
 OBSERVATION_BOUND_95 = 5.991464547107979
 
-#: One line for users: what the two numbers mean.
+#: One line for users: what the two numbers mean (corner FastSLAM's NIS: an observation, 2 dof).
 EXPLANATION = (
     "NEES (pose error against truth, weighted by the filter's own covariance) and NIS (each "
     "observation's surprise under the filter's prediction) measure whether the filter's stated "
     "uncertainty is right: a consistent filter averages NEES 3 and NIS 2, and about 95 % of values "
     f"fall inside the 95 % bounds ({POSE_BOUND_95:.2f} and {OBSERVATION_BOUND_95:.2f}); far larger "
     "means overconfident."
+)
+#: The same for the grid filter, whose NIS is the scan match's correction of the motion (3 dof).
+MOTION_EXPLANATION = (
+    "NEES (pose error against truth, weighted by the filter's own covariance) and the motion NIS (each "
+    "scan match's correction of the motion, weighted by the motion noise) measure whether the stated "
+    "uncertainty is right: a consistent filter averages NEES 3, and about 95 % of values fall inside "
+    f"the 95 % bound {POSE_BOUND_95:.2f}; far larger means overconfident. The motion NIS of a filter "
+    "whose matches follow its own map is expected under 3; only far above it is a sure sign of trouble."
 )
 
 

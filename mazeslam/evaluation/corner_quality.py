@@ -20,10 +20,10 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from mazeslam import log, sidecars
-from mazeslam.envs.laser import RayCaster
-from mazeslam.filters.corners import CornerExtractor, CornerMode, CornerParams
-from mazeslam.geometry import compose, transform_points
+from mazeslam.core.geometry import compose, transform_points
+from mazeslam.data import log, sidecars
+from mazeslam.features.corners import CornerExtractor, CornerMode, CornerParams
+from mazeslam.sim.laser import RayCaster
 
 #: Distance (m) below which a point counts as lying on a wall face.
 ON_FACE = 1e-6

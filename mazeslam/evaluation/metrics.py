@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from mazeslam.geometry import relative, wrap_angle
+from mazeslam.core.geometry import relative, wrap_angle
 
 
 def align_se2(estimate: np.ndarray, truth: np.ndarray) -> np.ndarray:

@@ -26,8 +26,8 @@ from pathlib import Path
 
 import numpy as np
 
-from mazeslam.config import InputError, read_text
-from mazeslam.geometry import relative, wrap_angle
+from mazeslam.core.config import InputError, read_text
+from mazeslam.core.geometry import relative, wrap_angle
 
 #: Relation radius for building logs with a scan about every metre (the CARMEN logs), m: the few
 #: scans before and after each scan and every revisit of its place (loop closures).

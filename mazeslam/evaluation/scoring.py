@@ -1,10 +1,11 @@
-"""How a filter run did against its log's truth: the one scoring function of ``mazeslam slam``
-and of sweeps.
+"""How a filter run did against its log's truth: the one scoring function of ``mazeslam slam``,
+sweeps and experiments, for both filters.
 
-Trajectories are scored at every record, or only at the scans when the filter moved by laser
-odometry (it knows no pose between two scans). The map is scored as estimated and after the rigid
+Trajectories are scored at the records the filter estimated (``SlamResult.estimated_records``):
+every record, or only the scans when the filter moved by laser odometry or mapped a grid (it knows
+no pose of its own between two scans). A landmark map is scored as estimated and after the rigid
 motion that best aligns the estimated trajectory with the true one (the map shares the
-trajectory's frame).
+trajectory's frame); a grid map is not scored here (``evaluation.sharpness`` measures it).
 """
 
 from __future__ import annotations
@@ -15,6 +16,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from mazeslam.data.loaded_run import LoadedRun
 from mazeslam.evaluation.consistency import nees_summary
 from mazeslam.evaluation.metrics import (
     absolute_trajectory_error,
@@ -24,17 +26,14 @@ from mazeslam.evaluation.metrics import (
     normalized_estimation_error,
     relative_pose_error,
 )
-from mazeslam.filters.motion import dead_reckoning
-from mazeslam.loaded_run import LoadedRun
-from mazeslam.slam import SlamResult
 
 if TYPE_CHECKING:
     import pandas as pd
 
+    from mazeslam.pipeline.result import SlamResult
+
 #: Stretch of the true path over which the relative pose error is measured, metres.
 RPE_DISTANCE = 0.1
-#: The estimator row of the filter's weighted-mean path in ``RunScore.table``.
-FILTER_MEAN = "FastSLAM (mean)"
 #: Dead reckoning's row.
 DEAD_RECKONING = "dead reckoning"
 
@@ -60,6 +59,8 @@ class RunScore:
 
     Attributes:
         records: (S,) the record indices scored.
+        filter_name: the filter's name; its rows are ``"<name> (mean)"`` (``mean_row``) and
+            ``"<name> (best particle)"`` (``best_row``).
         rows: one row per estimator (dead reckoning, laser odometry when used, the filter's mean
             and best particle), each ``COLUMNS`` (``error_rows``) and ``NEES_COLUMNS``: the
             ``mean_nees`` and ``median_nees`` of the filter's mean (NaN in the other rows).
@@ -68,10 +69,11 @@ class RunScore:
             nees_summary its mean, median and share inside the 95 % bound (``consistency``).
         alignment: (3,) the rigid motion (x, y, theta) that best maps the mean path onto the truth.
         map_errors: ``{"as estimated": ..., "aligned": ...}`` each ``metrics.map_error``'s dict,
-            against the true corners (empty when the log has none).
+            against the true corners (empty for a grid map).
     """
 
     records: np.ndarray
+    filter_name: str
     rows: dict[str, dict[str, float]]
     nees: np.ndarray
     nees_summary: dict
@@ -79,13 +81,23 @@ class RunScore:
     map_errors: dict
 
     @property
+    def mean_row(self) -> str:
+        """The row of the filter's weighted-mean path."""
+        return f"{self.filter_name} (mean)"
+
+    @property
+    def best_row(self) -> str:
+        """The row of the best particle's path."""
+        return f"{self.filter_name} (best particle)"
+
+    @property
     def table(self) -> pd.DataFrame:
         """``rows`` as a DataFrame indexed by ``estimator`` (pandas loads on first use)."""
         return _data_frame(self.rows)
 
-    def ate(self, estimator: str = FILTER_MEAN, aligned: bool = False) -> float:
-        """ATE RMSE of one estimator, metres."""
-        return float(self.rows[estimator]["aligned_rmse" if aligned else "ate_rmse"])
+    def ate(self, estimator: str | None = None, aligned: bool = False) -> float:
+        """ATE RMSE of one estimator (the filter's mean when None), metres."""
+        return float(self.rows[estimator or self.mean_row]["aligned_rmse" if aligned else "ate_rmse"])
 
     def markdown(self) -> str:
         """The table as ``table.to_markdown(floatfmt=".4f")`` prints it (``markdown_table``)."""
@@ -156,34 +168,37 @@ def _aligned_numbers(values: list[float], min_width: int, decimals: int) -> list
 
 
 def score_run(run: LoadedRun, result: SlamResult, match_radius: float = 0.05) -> RunScore | None:
-    """Score ``result`` against ``run``'s truth; None when the log has no truth."""
+    """Score ``result`` against ``run``'s truth at ``result.estimated_records``: dead reckoning,
+    laser odometry when the filter moved by it, the filter's mean (with its NEES) and best
+    particle; a landmark map against the true corners within ``match_radius`` m. None when the log
+    has no truth."""
     if run.truth is None:
         return None
-    laser = result.laser_odometry
-    records = laser.scan_records if laser is not None else np.arange(len(run.log))
+    records = result.estimated_records
     truth = run.truth[records]
-    # Dead reckoning leaves out the odometry records the filter left out (glitches), as the filter moves.
-    reckoned = dead_reckoning(run.log_without([r.index for r in result.dropped_odometry]), run.start_pose)
-    estimates = {DEAD_RECKONING: reckoned[records]}
-    if laser is not None:
-        estimates["laser odometry"] = laser.poses(run.start_pose)
+    estimates = {DEAD_RECKONING: result.dead_reckoning[records]}
+    if result.laser_odometry is not None:
+        estimates["laser odometry"] = result.laser_odometry.poses(run.start_pose)
     mean = result.mean_poses[records]
-    estimates.update({FILTER_MEAN: mean, "FastSLAM (best particle)": result.best_poses[records]})
+    name = result.filter_name
+    estimates.update({f"{name} (mean)": mean, f"{name} (best particle)": result.best_poses[records]})
     rows = error_rows(estimates, truth)
     nees = normalized_estimation_error(mean, result.pose_covariances[records], truth)
     summary = nees_summary(nees)
     for row in rows.values():
         row.update(dict.fromkeys(NEES_COLUMNS, math.nan))
-    rows[FILTER_MEAN].update(
+    rows[f"{name} (mean)"].update(
         {
             column: math.nan if summary[key] is None else float(summary[key])
             for column, key in zip(NEES_COLUMNS, ("mean", "median"))
         }
     )
     alignment = align_se2(mean, truth)
-    aligned = apply_se2(alignment, result.landmarks) if len(result.landmarks) else result.landmarks
-    map_errors = {
-        "as estimated": map_error(result.landmarks, run.true_corners, match_radius),
-        "aligned": map_error(aligned, run.true_corners, match_radius),
-    }
-    return RunScore(records, rows, nees, summary, alignment, map_errors)
+    map_errors = {}
+    if result.grid is None:
+        aligned = apply_se2(alignment, result.landmarks) if len(result.landmarks) else result.landmarks
+        map_errors = {
+            "as estimated": map_error(result.landmarks, run.true_corners, match_radius),
+            "aligned": map_error(aligned, run.true_corners, match_radius),
+        }
+    return RunScore(records, name, rows, nees, summary, alignment, map_errors)

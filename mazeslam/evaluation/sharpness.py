@@ -1,6 +1,6 @@
 """Map sharpness: how smeared a log's walls are when its scans are placed along a path.
 
-The measure for real logs without truth (issue 16). Every scan's returns with range in
+The measure for real logs without truth. Every scan's returns with range in
 [``min_range``, ``max_range``] are placed at the estimated pose of their record (the log's beam
 geometry and mounting offset) and the distinct occupied ``cell`` x ``cell`` cells are counted:
 fewer cells mean sharper walls. Dead reckoning is the same count along the integrated odometry,
@@ -18,13 +18,13 @@ from dataclasses import asdict, dataclass
 
 import numpy as np
 
-from mazeslam import log
-from mazeslam.beams import BeamGeometry
-from mazeslam.evaluation.slam_report import scan_points_world
-from mazeslam.filters.motion import dead_reckoning
-from mazeslam.loaded_run import LoadedRun
+from mazeslam.core.beams import BeamGeometry
+from mazeslam.core.motion import dead_reckoning
+from mazeslam.data import log
+from mazeslam.data.loaded_run import LoadedRun
+from mazeslam.data.scans import scan_points_world
 
-#: The issue's definition: returns of 0.05-0.4 m (the course camera's trusted span), 1 cm cells.
+#: The measure's defaults: returns of 0.05-0.4 m (the course camera's trusted span), 1 cm cells.
 TRUSTED_SPAN = (0.05, 0.4)
 CELL = 0.01
 #: A path whose bounding box is smaller than this (m) stands still.

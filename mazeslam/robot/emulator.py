@@ -14,10 +14,11 @@ import threading
 
 import numpy as np
 
-from mazeslam.envs.laser import RayCaster
-from mazeslam.envs.simulated_robot import SimulatedRobot
-from mazeslam.geometry import transform_points
-from mazeslam.robot.omnicam import CameraCalibration, render_view
+from mazeslam.core.geometry import transform_points
+from mazeslam.core.mirror import CameraCalibration
+from mazeslam.robot.omnicam import render_view
+from mazeslam.robot.simulated import SimulatedRobot
+from mazeslam.sim.laser import RayCaster
 
 
 class EPuckEmulator:

@@ -21,8 +21,8 @@ import math
 
 import numpy as np
 
-from mazeslam.envs.world import RobotParams
 from mazeslam.robot.interface import Robot, RobotDisconnected, RobotError
+from mazeslam.sim.world import RobotParams
 
 #: The e-puck's speed command is limited to +-1000 steps/s.
 MAX_STEPS_PER_SECOND = 1000

@@ -3,7 +3,7 @@
 A ``Robot`` drives its wheels, reports its odometry since the last report, and scans. Errors are
 ``RobotError`` (the robot answered something it should not) or ``RobotDisconnected`` (it is gone);
 both name the device and what happened. Implementations: the e-puck's serial driver
-(``mazeslam.robot.epuck.EPuck``) and the simulator (``mazeslam.envs.simulated_robot.SimulatedRobot``).
+(``mazeslam.robot.epuck.EPuck``) and the simulator (``mazeslam.robot.simulated.SimulatedRobot``).
 """
 
 from __future__ import annotations

@@ -29,11 +29,11 @@ from pathlib import Path
 
 import numpy as np
 
-from mazeslam import sidecars
-from mazeslam.beams import BeamGeometry
-from mazeslam.envs.simulated_robot import SimulatedRobot
-from mazeslam.log import LogWriter
+from mazeslam.core.beams import BeamGeometry
+from mazeslam.data import sidecars
+from mazeslam.data.log import LogWriter
 from mazeslam.robot.interface import Robot, RobotDisconnected, RobotError
+from mazeslam.robot.simulated import SimulatedRobot
 
 
 @dataclass

@@ -19,8 +19,8 @@ from matplotlib.lines import Line2D  # noqa: E402
 from matplotlib.patches import Patch  # noqa: E402
 
 import mazeslam  # noqa: E402, F401  (registers the environments)
-from mazeslam.evaluation.plots import save_figure  # noqa: E402
-from mazeslam.online_slam import OnlineFastSLAM  # noqa: E402
+from mazeslam.viz.plots import save_figure  # noqa: E402
+from mazeslam.envs.online_slam import OnlineFastSLAM  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[2]
 MARGIN = 0.02  # metres around the maze in the environment's picture (envs/rendering.py)

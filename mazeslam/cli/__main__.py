@@ -1,0 +1,5 @@
+"""``python -m mazeslam.cli``: the ``mazeslam`` command."""
+
+from mazeslam.cli.main import run
+
+run()

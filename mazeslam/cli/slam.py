@@ -1,0 +1,442 @@
+"""``mazeslam slam``: run the filter on a log file, write its outputs, and say how it did."""
+
+from __future__ import annotations
+
+import dataclasses
+import time
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+import click
+
+from mazeslam.cli.options import PARTICLES, SEED, beam_geometry_options, geometry_overrides
+from mazeslam.cli.run_folders import SLAM_FILES, clear_outputs, default_out_dir
+from mazeslam.cli.side_process import SideProcess
+from mazeslam.core.beams import SensorOverrides
+from mazeslam.core.config import with_settings
+from mazeslam.core.outputs import prepare_output_folder
+from mazeslam.data import sidecars
+from mazeslam.data.beam_detection import convention_given, convention_warning, with_detected_convention
+from mazeslam.data.loaded_run import LoadedRun, load_run
+from mazeslam.data.scans import scan_points_world
+from mazeslam.evaluation.consistency import EXPLANATION, MOTION_EXPLANATION, POSE_BOUND_95, summarise
+from mazeslam.evaluation.scoring import RPE_DISTANCE, score_run
+from mazeslam.evaluation.sharpness import paths_sharpness, sharpness_lines
+from mazeslam.features.corners import CornerExtractor
+from mazeslam.gridslam.filter import SearchMode
+from mazeslam.gridslam.occupancy import grid_states
+from mazeslam.pipeline import MapKind, SlamConfig, SlamResult, load_slam_config, run_slam
+from mazeslam.pipeline.outputs import consistency, write_outputs
+from mazeslam.smoothing.optimum import optimum_columns, optimum_line
+from mazeslam.viz.slam_figure import SlamFigure, animate_slam, draw_and_export
+
+if TYPE_CHECKING:
+    from mazeslam.viz.live import GridLiveView, LiveView
+
+#: About how many frames ``--animate`` draws, whatever the log's length.
+ANIMATION_FRAMES = 150
+#: What the side process loads while the filter runs: what draws ``slam.png`` and exports the map.
+FIGURE_MODULES = (
+    "matplotlib.figure",
+    "matplotlib.backends.backend_agg",
+    "matplotlib.image",
+    "mazeslam.viz.slam_figure",
+    "mazeslam.data.map_export",
+)
+
+
+@click.command()
+@click.argument("log_file", type=click.Path(exists=True, dir_okay=False, path_type=Path))
+@click.option(
+    "--particles",
+    type=PARTICLES,
+    help="Particle count of the filter that runs [default: from the config; 100 without one].",
+)
+@click.option(
+    "--config",
+    "config_path",
+    type=click.Path(exists=True, dir_okay=False, path_type=Path),
+    help="FastSLAM TOML with [fastslam], [corners], [sensor] (see configs/fastslam.toml).",
+)
+@click.option(
+    "--out",
+    "out_dir",
+    type=click.Path(file_okay=False, path_type=Path),
+    help="Folder for trajectory.csv, map.json, slam.png, occupancy.pgm/.yaml [default: runs/<log name>/slam/ "
+    "under the current directory]; a rerun replaces the files of the last run.",
+)
+@click.option("--seed", type=SEED, help="Seed of the filter's random draws [default: from the config, 0].")
+@click.option(
+    "--association",
+    type=click.Choice(["unknown", "known"]),
+    help="unknown: maximum likelihood with a gate; known: the landmark records' identities.",
+)
+@click.option("--version", "version", type=click.Choice(["1", "2"]), help="FastSLAM 1.0 or 2.0.")
+@click.option(
+    "--map",
+    "map_kind",
+    type=click.Choice(["landmarks", "grid"]),
+    help="What the particles map [default: the config's [map] kind, landmarks]: landmarks (corner FastSLAM) "
+    "or grid (an occupancy grid each, gmapping's filter).",
+)
+@click.option(
+    "--animate",
+    is_flag=True,
+    help="Also write the run as an animation (particles, map, current scan and corners over time): "
+    "slam.mp4 when ffmpeg is available (pip install 'mazeslam[video]'), slam.gif otherwise.",
+)
+@click.option(
+    "--live",
+    is_flag=True,
+    help="Show the filter as it runs in a window (particles, map, current scan and corners; the grid "
+    "filter's map, path and particles); without a display, says so (use --animate).",
+)
+@beam_geometry_options
+@click.option("--quiet", is_flag=True, help="No progress bar.")
+def slam(
+    log_file,
+    particles,
+    config_path,
+    out_dir,
+    seed,
+    association,
+    version,
+    map_kind,
+    animate,
+    live,
+    first_beam_angle,
+    beam_direction,
+    mount_x,
+    quiet,
+):
+    """Run FastSLAM on a course log: trajectory, map, the exercise's figure, and errors when truth exists."""
+    overrides = geometry_overrides(first_beam_angle, beam_direction, mount_x)
+    out_dir = prepare_output_folder(out_dir or default_out_dir(log_file, "slam"))
+    clear_outputs(out_dir, SLAM_FILES)
+    filter_changes = {
+        "NPARTICLES": particles,
+        "seed": seed,
+        "association": association,
+        "version": int(version) if version else None,
+    }
+    lines = run_slam_command(
+        log_file,
+        config_path,
+        out_dir,
+        filter_changes,
+        overrides,
+        animate,
+        not quiet,
+        live=live,
+        echo=lambda message: click.echo(message, err=True),
+        map_kind=map_kind,
+        side_process=True,
+    )
+    click.echo("\n".join(lines))
+    click.echo(f"results in {out_dir}")
+
+
+def run_slam_command(
+    log_file,
+    config_path,
+    out_dir,
+    filter_changes: dict | None = None,
+    sensor: SensorOverrides | None = None,
+    animate=False,
+    progress=True,
+    live=False,
+    echo=None,
+    map_kind: str | None = None,
+    side_process: bool = False,
+) -> list[str]:
+    """Run, write ``out_dir``/{trajectory.csv, best_trajectory.csv, map.json, slam.png, occupancy.pgm/.yaml/.png,
+    landmarks.csv[, slam.gif]};
+    return the lines to print. ``filter_changes`` replace ``[fastslam]`` settings and ``sensor``
+    the ``[sensor]`` ones (None values: keep the config's). ``live``: draw the filter as it runs
+    (``mazeslam.viz.live``; its note when there is no window goes to ``echo`` at once, and to the lines).
+    ``map_kind`` replaces ``[map] kind``; the particle count and seed go to the filter that runs.
+    ``side_process``: corner FastSLAM's ``slam.png`` and map export are made by a ``SideProcess``
+    forked before the filter runs, which loads matplotlib meanwhile and draws while this process
+    scores the run and writes the rest (the command line's way; otherwise they are made here)."""
+    config = load_slam_config(config_path)
+    filter_changes = filter_changes or {}
+    changes = {"map.kind": map_kind, **{f"fastslam.{name}": value for name, value in filter_changes.items()}}
+    changes.update({"grid.particles": filter_changes.get("NPARTICLES"), "grid.seed": filter_changes.get("seed")})
+    config = with_settings(config, changes)
+    config = dataclasses.replace(config, sensor=(sensor or SensorOverrides()).over(config.sensor))
+    run = load_run(log_file, config.sensor)
+    run = with_detected_convention(run, config, cache_folder=Path(out_dir))
+    notes = [note for note in [_given_convention_warning(run, config), _blind_motion_note(run, config)] if note]
+    grid = config.map.kind == MapKind.GRID
+    with SideProcess(FIGURE_MODULES, fork=side_process and not grid) as side:
+        return _run_and_write(log_file, run, config, Path(out_dir), notes, animate, progress, live, echo, side)
+
+
+def _run_and_write(
+    log_file, run: LoadedRun, config: SlamConfig, out_dir: Path, notes: list[str], animate, progress, live, echo, side
+) -> list[str]:
+    """``run_slam_command`` once the settings and the log are read: the filter, its outputs and
+    lines; ``side`` (a ``SideProcess``) draws corner FastSLAM's figure and exports its map."""
+    grid = config.map.kind == MapKind.GRID
+    title = f"{run.path.name}: {config.map.kind.filter_name}, {config.particles} particles"
+    updates = int(run.log.is_scan.sum() + (0 if grid else run.log.is_landmark.sum()))
+    every = max(1, updates // ANIMATION_FRAMES) if animate else 0  # at most ~ANIMATION_FRAMES frames
+    view: LiveView | GridLiveView | None = None
+    if live:
+        from mazeslam.viz.live import GridLiveView, LiveView
+
+        view = GridLiveView(run, title) if grid else LiveView(run, config.corners, title)
+        if view.message and echo is not None:
+            echo(view.message)
+    began = time.perf_counter()
+    result = run_slam(run, config, progress, snapshot_every=every, on_update=view)
+    if view is not None:
+        view.close(len(run.log) - 1, result.filter)
+    matching_seconds = time.perf_counter() - began - result.step_seconds.sum()
+    lines = _run_lines(run, config, result, matching_seconds, notes)
+    if view is not None:
+        lines.append(
+            f"Live view: {view.frames} frames drawn in {view.drawing_seconds:.1f} s"
+            + ("" if view.window else " (off-screen: no display)")
+        )
+    span = (
+        (config.grid.grid.min_range, config.grid.grid.max_range)
+        if grid
+        else (
+            config.corners.min_range,
+            config.corners.max_range,
+        )
+    )
+    truth_label = "reference path" if run.truth_is_reference else "true path"
+    points = None
+    if not grid:
+        points = scan_points_world(run.log, result.mean_poses, run.geometry, *span)
+        figure = SlamFigure.of(
+            result,
+            points,
+            truth=run.truth,
+            walls=run.walls,
+            true_landmarks=run.true_corners if run.world is not None else None,
+            title=title,
+            truth_label=truth_label,
+        )
+        side.start(draw_and_export, out_dir, figure, run.log, run.geometry, *span)
+    score = score_run(run, result, config.evaluation.match_radius)
+    nis = result.nis_summary()
+    nis_by_kind = {kind: summarise(values, result.nis_bound) for kind, values in sorted(result.nis_by_kind().items())}
+    line_numbers = run.log.line_numbers
+    assert line_numbers is not None  # the log was read from a file: each record has its line
+    extra = {
+        "source": str(log_file),
+        "beam_geometry": run.geometry.to_dict(),
+        "start_pose": run.start_pose.tolist(),
+        "parameters": dataclasses.asdict(config),
+        "nis": nis,
+        "nis_by_kind": nis_by_kind,
+        "resampled_fraction": result.resampled_fraction,
+        "dropped_odometry_lines": [int(line_numbers[r.index]) for r in result.dropped_odometry],
+    }
+    if not grid:
+        extra["consistency"] = consistency(result)
+    lines += _uncertainty_lines(result, nis, score.nees_summary if score is not None else None, nis_by_kind)
+    if run.log.n_beams:
+        placed_by = {"mean path": result.mean_poses, "best particle": result.best_poses}
+        sharpness = paths_sharpness(run, placed_by, config.odometry.jump_tolerance, *span)
+        lines += sharpness_lines(sharpness, *span)
+        extra["sharpness"] = {name: value.to_dict() for name, value in sharpness.items()}
+    if score is not None:
+        lines += _score_lines(run, result, score, config.evaluation.match_radius)
+        extra["ate"] = score.row_records()
+        extra["map_error"] = score.map_errors
+        extra["nees"] = score.nees_summary
+        optimum = optimum_columns(run, config, score)
+        if optimum is not None:
+            lines.append(optimum_line(optimum, result.filter_name))
+            extra["optimum"] = optimum
+    else:
+        lines.append("no ground truth beside the log: no errors to report")
+    paths = write_outputs(out_dir, result, extra)
+    if run.truth is not None:
+        paths["truth_tum"] = out_dir / "truth.tum"
+        sidecars.write_tum(paths["truth_tum"], run.log.times, run.truth)
+    if grid:
+        from mazeslam.viz.grid_figure import plot_grid_run
+
+        assert result.grid is not None
+        paths["figure"] = plot_grid_run(
+            out_dir / "slam.png",
+            grid_states(result.grid),
+            result.mean_poses,
+            result.best_poses,
+            result.filter.poses,
+            title,
+            run.truth,
+            truth_label,
+        )
+    else:
+        paths.update(side.result())  # slam.png and the map export
+    if animate:
+        paths["animation"] = _animate(run, config, result, points, title, truth_label, progress, out_dir)
+    lines.append("wrote " + ", ".join(str(p) for p in paths.values()))
+    return lines
+
+
+def _animate(run: LoadedRun, config: SlamConfig, result: SlamResult, points, title, truth_label, progress, out_dir):
+    """The run as an animation (``slam.mp4`` with ffmpeg, else ``slam.gif``): corner FastSLAM's
+    particles, landmarks and scans (``animate_slam``), or the grid filter's map growing (``animate_grid``)."""
+    if result.grid is not None:
+        from mazeslam.viz.grid_animation import animate_grid
+
+        records = result.estimated_records
+        return animate_grid(
+            out_dir / "slam.gif",
+            result.snapshots,
+            result.mean_poses[records],
+            title,
+            run.truth[records] if run.truth is not None else None,
+            truth_label,
+            progress=progress,
+        )
+    from mazeslam.viz.slam_view import scan_source
+
+    extractor = CornerExtractor(run.geometry, run.log.width, config.corners)
+    return animate_slam(
+        out_dir / "slam.gif",
+        result,
+        points,
+        run.truth,
+        run.walls,
+        scan_at=scan_source(run.log, result.mean_poses, run.geometry, extractor) if run.log.n_beams else None,
+        title=title,
+        progress=progress,
+        truth_label=truth_label,
+    )
+
+
+def _run_lines(
+    run: LoadedRun, config: SlamConfig, result: SlamResult, matching_seconds: float, notes: list[str]
+) -> list[str]:
+    """What the run did: records, particles, resamplings, speed, laser odometry, ``notes`` (warnings), glitches."""
+    course_log, seconds = run.log, result.step_seconds.sum()
+    if result.grid_run is not None:
+        seconds = result.grid_run.total_seconds  # its laser odometry included
+    speed = (
+        f" ({course_log.duration / max(seconds, 1e-9):.0f}x real time)"
+        if course_log.duration > 0
+        else " (the log's timestamps span no time)"
+    )
+    if result.grid_run is not None:
+        holds = f"peak map memory {result.grid_run.peak_map_bytes / 2**20:.0f} MB (tiles shared between particles)"
+    else:
+        holds = f"{len(result.landmarks)} landmarks in the best particle's map"
+    lines = [
+        f"{run.path}: {len(course_log)} records, {int(course_log.is_scan.sum())} scans, "
+        f"{result.updates} observation updates; "
+        f"beam geometry from {run.geometry_origin}",
+        f"{result.filter_name}: {config.particles} particles, {result.resamplings} resamplings, {holds}, "
+        f"{seconds:.2f} s" + speed,
+    ]
+    if result.laser_odometry is not None:
+        laser = result.laser_odometry
+        lines.append(
+            f"Laser odometry ({matching_seconds:.1f} s): {int(laser.accepted.sum())} of "
+            f"{len(laser.accepted) - 1} scan-to-scan matches accepted; "
+            "intervals without odometry records (matched by correlative search): "
+            f"{int((~laser.had_odometry[1:]).sum())}"
+        )
+    lines += notes
+    glitches = run.glitch_line(config.odometry.jump_tolerance, pairs_summed=result.grid is not None)
+    if glitches:
+        lines.append(glitches)
+    if result.grid is None:
+        checks = consistency(result)
+        lines.append(
+            f"Map consistency: {checks['reobserved']} of {checks['landmarks']} landmarks re-observed "
+            f"(median {checks['median_observations']:.0f} observations each), the nearest two "
+            f"{checks['nearest_landmarks_m']:.3f} m apart; largest path step between records "
+            f"{checks['largest_path_step_m']:.3f} m"
+        )
+    return lines
+
+
+def _blind_motion_note(run: LoadedRun, config: SlamConfig) -> str | None:
+    """A note when the grid filter maps a log of scans without odometry records by searching only
+    where a match fails: its laser odometry then matches blind and can be a right angle wrong."""
+    course_log = run.log
+    if config.map.kind != MapKind.GRID or config.grid.search != SearchMode.FAILED_MATCH:
+        return None
+    if course_log.is_odometry.any() or not course_log.is_scan.any():
+        return None
+    return (
+        f"note: {run.path.name} has no odometry records, so the laser odometry matches each scan blind; "
+        '[grid] search = "every-scan" (configs/carmen_without_odometry.toml for CARMEN logs) searches '
+        "every scan against the map for its wrong turns"
+    )
+
+
+def _given_convention_warning(run: LoadedRun, config: SlamConfig) -> str | None:
+    """A warning when the beam convention the settings give fits the log's scans clearly worse
+    than another (``convention_warning``); None otherwise, or when a sidecar recorded it."""
+    if not convention_given(config.sensor) or run.geometry_from_sidecar or run.log.is_scan.sum() < 2:
+        return None
+    corners = config.corners
+    return convention_warning(
+        run.log, run.geometry, corners.min_range, corners.max_range, config.odometry.jump_tolerance
+    )
+
+
+def _uncertainty_lines(result: SlamResult, nis: dict, nees: dict | None, nis_by_kind: dict[str, dict]) -> list[str]:
+    """Is the stated uncertainty right: NIS always (corner FastSLAM's observations, with its mean per
+    kind of observation when there are several kinds: which part of the observation model is off;
+    the grid filter's scan-match corrections of the motion), NEES with truth, and what they mean."""
+
+    def described(summary: dict, bound: float, consistent: int) -> str:
+        if not summary["count"]:
+            return "undefined"
+        return (
+            f"mean {summary['mean']:.2f}, median {summary['median']:.2f}, {100 * summary['inside_95']:.0f} % "
+            f"inside the 95 % bound {bound:.2f} (consistent: {consistent})"
+        )
+
+    if result.grid is not None:
+        what = f"motion NIS of {nis['count']} matched scans"
+        hint = (
+            "  far less than 3: [grid] motion_noise is wider than the corrections the scan matches make, "
+            "far more: narrower"
+        )
+    else:
+        what, hint = f"NIS of {nis['count']} associated observations", None
+    line = f"Uncertainty: {what} {described(nis, result.nis_bound, result.nis_dof)}"
+    if nees is not None:
+        line += f"; pose NEES {described(nees, POSE_BOUND_95, 3)}"
+    lines = [line]
+    if hint:
+        lines.append(hint)
+    if len(nis_by_kind) > 1:
+        kinds = ", ".join(f"{kind} {summary['mean']:.2f} ({summary['count']})" for kind, summary in nis_by_kind.items())
+        lines.append(f"  NIS mean by kind of observation (count): {kinds}")
+    return [*lines, "  " + (MOTION_EXPLANATION if result.grid is not None else EXPLANATION)]
+
+
+def _score_lines(run: LoadedRun, result: SlamResult, score, match_radius: float) -> list[str]:
+    """The error table against the truth and the map's errors."""
+    scored = (
+        "at every record"
+        if result.laser_odometry is None and result.grid is None
+        else "at the scans (the filter estimates no pose of its own between scans)"
+    )
+    lines = [
+        f"Errors against {run.truth_label}, {scored}: ATE [m] (aligned: after the best rigid motion), RPE over "
+        f"{RPE_DISTANCE} m of path [m, rad], NEES of the mean pose (consistent: 3):",
+        score.markdown(),
+    ]
+    if result.grid is not None:
+        return lines
+    if not len(run.true_corners):
+        return lines + ["Map: no true corners beside the log, the map is not scored"]
+    for name, errors in score.map_errors.items():
+        lines.append(
+            f"Map ({name}): {errors['matched']} landmarks within {match_radius:g} m of a true one, "
+            f"RMSE {errors['rmse']:.4f} m, precision {errors['precision']:.2f}, recall {errors['recall']:.2f}"
+        )
+    return lines

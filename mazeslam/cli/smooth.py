@@ -1,0 +1,195 @@
+"""``mazeslam smooth``: the batch least-squares optimum of a log (``filters/smoother.py``), its outputs,
+and the optimum beside a FastSLAM run (``mazeslam slam`` and sweeps report the filter's ratio to it).
+
+Association, which landmark each corner is, comes from outside the smoother:
+
+* ``known``: the true corner within ``[evaluation] match_radius`` of where the true pose puts the
+  observation (``slam.truth_identities``); simulated and referenced logs with a map of corners;
+* ``from-run``: a FastSLAM run's final map. Each scan's corners are placed in the world by the run's
+  mean pose at that scan (``trajectory.csv``) and named by the nearest landmark of its ``map.json``
+  within ``match_radius``; farther ones are left out. This re-associates after the fact: the filter's
+  own choices are not saved, the map is the best particle's at the end, and the mean path is not that
+  particle's history, so an observation made before a loop closed can fall to a neighbouring landmark
+  or outside the radius.
+
+Noise: the config's ``[fastslam]`` settings (the filter's own model), corners by its ``[corners]``;
+odometry records the filter leaves out as glitches (``[odometry] jump_tolerance``) move nothing here either.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+from pathlib import Path
+
+import click
+import numpy as np
+
+from mazeslam.cli.options import beam_geometry_options, geometry_overrides
+from mazeslam.cli.run_folders import SMOOTH_FILES, clear_outputs, default_out_dir
+from mazeslam.core.beams import SensorOverrides
+from mazeslam.core.config import jsonable
+from mazeslam.core.motion import dead_reckoning
+from mazeslam.core.outputs import prepare_output_folder
+from mazeslam.data import sidecars
+from mazeslam.data.beam_detection import with_detected_convention
+from mazeslam.data.loaded_run import LoadedRun, load_run
+from mazeslam.data.scans import scan_points_world
+from mazeslam.evaluation.consistency import nees_summary
+from mazeslam.evaluation.metrics import align_se2, apply_se2, map_error, normalized_estimation_error
+from mazeslam.evaluation.scoring import DEAD_RECKONING, error_table
+from mazeslam.fastslam.identities import truth_identities
+from mazeslam.pipeline import SlamConfig, load_slam_config
+from mazeslam.smoothing.optimum import OPTIMUM, Smoothed, from_run_identities, smooth_run
+from mazeslam.viz.smooth_figure import plot_smoothed
+
+
+@click.command()
+@click.argument("log_file", type=click.Path(exists=True, dir_okay=False, path_type=Path))
+@click.option(
+    "--config",
+    "config_path",
+    type=click.Path(exists=True, dir_okay=False, path_type=Path),
+    help="The slam TOML whose [fastslam] noise, [corners] and [sensor] to use (see configs/fastslam.toml).",
+)
+@click.option(
+    "--association",
+    type=click.Choice(["known", "from-run"]),
+    default="known",
+    show_default=True,
+    help="known: the true corners (truth and map sidecars); from-run: the map of a `mazeslam slam` run.",
+)
+@click.argument("run_dir", required=False, type=click.Path(exists=True, file_okay=False, path_type=Path))
+@click.option(
+    "--out",
+    "out_dir",
+    type=click.Path(file_okay=False, path_type=Path),
+    help="Folder for trajectory.csv, map.json, smooth.png [default: runs/<log name>/smooth/ under the "
+    "current directory]; a rerun replaces the files of the last run.",
+)
+@beam_geometry_options
+def smooth(log_file, config_path, association, run_dir, out_dir, first_beam_angle, beam_direction, mount_x):
+    """Batch least-squares SLAM over the whole log: the optimum FastSLAM is measured against.
+
+    With --association from-run, RUN_DIR is the output folder of `mazeslam slam` on the same log."""
+    if (association == "from-run") != (run_dir is not None):
+        raise click.UsageError("RUN_DIR goes with --association from-run, and only with it")
+    out_dir = out_dir or default_out_dir(log_file, "smooth")
+    if run_dir is not None and out_dir.resolve() == run_dir.resolve():
+        raise click.UsageError("--out is RUN_DIR: the smoother would replace the run it reads; give another folder")
+    out_dir = prepare_output_folder(out_dir)
+    clear_outputs(out_dir, SMOOTH_FILES)
+    overrides = geometry_overrides(first_beam_angle, beam_direction, mount_x)
+    click.echo("\n".join(run_smooth_command(log_file, config_path, out_dir, association, run_dir, overrides)))
+    click.echo(f"results in {out_dir}")
+
+
+def run_smooth_command(
+    log_file, config_path, out_dir, association: str = "known", run_dir=None, sensor: SensorOverrides | None = None
+) -> list[str]:
+    """Smooth, write ``out_dir``/{trajectory.csv, trajectory.tum, map.json, smooth.png}; return the
+    lines to print. ``association``: "known" (the truth's corners) or "from-run" (``run_dir``'s map)."""
+    config = load_slam_config(config_path)
+    config = dataclasses.replace(config, sensor=(sensor or SensorOverrides()).over(config.sensor))
+    run = load_run(log_file, config.sensor)
+    run = with_detected_convention(run, config, cache_folder=Path(out_dir))
+    radius = config.evaluation.match_radius
+    if association == "known":
+        if run.truth is None or not len(run.true_corners):
+            raise ValueError(
+                f"{run.path}: --association known needs the truth and map sidecars with the true corners "
+                f"({run.name}.truth.csv, {run.name}.map.json); use --association from-run RUN_DIR"
+            )
+        identify, how = truth_identities(run, radius), f"known: the true corner within {radius:g} m"
+    else:
+        identify = from_run_identities(run, run_dir, radius)
+        how = f"from the run {run_dir}: its map's nearest landmark within {radius:g} m"
+    smoothed = smooth_run(run, config, identify)
+    result = smoothed.result
+    lines = [
+        (
+            f"{run.path}: {len(result.poses)} scan poses, {len(result.landmarks)} landmarks, "
+            f"association {how}; beam geometry from {run.geometry_origin}"
+        ),
+        (
+            f"Batch optimum: {result.iterations} iterations "
+            f"({'converged' if result.converged else 'NOT converged'}), "
+            f"{smoothed.seconds:.2f} s; chi2 {result.chi2:.1f} over {result.dof} degrees of freedom, chi2/dof "
+            f"{result.chi2_per_dof:.2f} (1: the noise model fits the residuals; below: it overstates the noise)"
+        ),
+    ]
+    document = {
+        "frame": "world; metres",
+        "source": str(log_file),
+        "association": how,
+        "landmark_ids": result.landmark_ids.tolist(),
+        "landmarks": result.landmarks.round(6).tolist(),
+        "landmark_covariances": result.landmark_covariances.tolist(),
+        "chi2": result.chi2,
+        "dof": result.dof,
+        "chi2_per_dof": result.chi2_per_dof,
+        "iterations": result.iterations,
+        "converged": result.converged,
+        "scans": len(result.poses),
+        "seconds": smoothed.seconds,
+        "parameters": dataclasses.asdict(config),
+    }
+    if run.truth is not None:
+        errors, error_lines = _errors(run, run.truth, smoothed, radius)
+        document.update(errors)
+        lines += error_lines
+    else:
+        lines.append("no ground truth beside the log: no errors to report")
+    paths = _write_outputs(Path(out_dir), run, config, smoothed, document)
+    lines.append("wrote " + ", ".join(str(p) for p in paths.values()))
+    return lines
+
+
+def _errors(run: LoadedRun, truth: np.ndarray, smoothed: Smoothed, radius: float) -> tuple[dict, list[str]]:
+    """ATE at every record against dead reckoning, NEES at the scans, map errors against ``truth``
+    (``run.truth``): for map.json and to print."""
+    result = smoothed.result
+    table = error_table({DEAD_RECKONING: dead_reckoning(run.log, run.start_pose), OPTIMUM: smoothed.poses}, truth)
+    nees = nees_summary(normalized_estimation_error(result.poses, result.pose_covariances, truth[result.scan_records]))
+    aligned = (
+        apply_se2(align_se2(smoothed.poses, truth), result.landmarks) if len(result.landmarks) else result.landmarks
+    )
+    map_errors = {
+        "as estimated": map_error(result.landmarks, run.true_corners, radius),
+        "aligned": map_error(aligned, run.true_corners, radius),
+    }
+    lines = [
+        (
+            f"Errors against {run.truth_label} at every record: ATE [m] (aligned: after the best rigid motion), "
+            "RPE [m, rad]:"
+        ),
+        table.to_markdown(floatfmt=".4f"),
+        f"Pose NEES at the {nees['count']} scans (consistent: 3): "
+        + (
+            f"mean {nees['mean']:.2f}, median {nees['median']:.2f}, "
+            f"{100 * nees['inside_95']:.0f} % inside the 95 % bound"
+            if nees["count"]
+            else "undefined"
+        ),
+    ]
+    if len(run.true_corners):
+        errors = map_errors["as estimated"]
+        lines.append(
+            f"Map: {errors['matched']} landmarks within {radius:g} m of a true one, "
+            f"RMSE {errors['rmse']:.4f} m (aligned {map_errors['aligned']['rmse']:.4f} m)"
+        )
+    return {"ate": table.reset_index().to_dict(orient="records"), "nees": nees, "map_error": map_errors}, lines
+
+
+def _write_outputs(out_dir: Path, run: LoadedRun, config: SlamConfig, smoothed: Smoothed, document: dict) -> dict:
+    """trajectory.csv (with covariances), trajectory.tum, map.json (strict JSON) and smooth.png."""
+    out_dir.mkdir(parents=True, exist_ok=True)
+    paths = {"trajectory": out_dir / "trajectory.csv", "tum": out_dir / "trajectory.tum", "map": out_dir / "map.json"}
+    sidecars.write_trajectory(paths["trajectory"], run.log.times, smoothed.poses, smoothed.covariances)
+    sidecars.write_tum(paths["tum"], run.log.times, smoothed.poses)
+    paths["map"].write_text(json.dumps(jsonable(document), indent=1, allow_nan=False) + "\n")
+    points = scan_points_world(
+        run.log, smoothed.poses, run.geometry, config.corners.min_range, config.corners.max_range
+    )
+    paths["figure"] = plot_smoothed(out_dir / "smooth.png", run, smoothed, points)
+    return paths

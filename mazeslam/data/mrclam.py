@@ -1,0 +1,122 @@
+"""Import one robot of the UTIAS MRCLAM datasets (Leung et al. 2011) as a course log with truth.
+
+Inputs (``.dat`` or ``.dat.gz`` in the dataset folder, '#' comments):
+
+* ``RobotK_Odometry.dat``: time [s], forward velocity [m/s], angular velocity [rad/s];
+* ``RobotK_Measurement.dat``: time [s], barcode, range [m], bearing [rad];
+* ``RobotK_Groundtruth.dat``: time [s], x, y, orientation (Vicon);
+* ``Landmark_Groundtruth.dat``: subject, x, y, std x, std y; ``Barcodes.dat``: subject, barcode.
+
+Output, beside ``out``: the course log (odometry records and landmark observation records, flag
+2, with the landmark's subject number as its identity), ``*.truth.csv`` (Vicon pose interpolated
+at every record) and ``*.map.json`` (``corners``: the surveyed landmarks; ``landmark_ids``; no
+walls). Each velocity sample holds until the next; an odometry record is written at every
+odometry sample and right before every measurement, integrating the velocities exactly up to it.
+Measurements of other robots (subjects 1-5) and of unknown barcodes are left out and counted.
+"""
+
+from __future__ import annotations
+
+from collections import Counter
+from pathlib import Path
+
+import numpy as np
+
+from mazeslam.core.config import read_text
+from mazeslam.core.geometry import wrap_angle
+from mazeslam.data import sidecars
+from mazeslam.data.log import MAX_TIME, LogWriter
+
+ROBOT_SUBJECTS = range(1, 6)
+
+
+def _table(folder: Path, name: str, columns: int) -> np.ndarray:
+    for candidate in (folder / name, folder / f"{name}.gz"):
+        if candidate.exists():
+            text = read_text(candidate, "MRCLAM table")
+            try:
+                table = np.loadtxt(text.splitlines(), comments="#", ndmin=2)
+            except ValueError as error:
+                raise ValueError(f"{candidate}: {str(error)[:200]}") from error
+            if table.shape[1] != columns:
+                raise ValueError(f"{candidate}: expected {columns} columns, found {table.shape[1]}")
+            if not np.all(np.isfinite(table)) or np.abs(table).max(initial=0) > MAX_TIME:
+                raise ValueError(f"{candidate}: holds a value that is not a finite number of sane size")
+            return table
+    raise FileNotFoundError(f"{folder}: neither {name} nor {name}.gz found")
+
+
+def import_mrclam(folder: str | Path, robot: int, out: str | Path) -> dict:
+    """Write robot ``robot``'s log, truth and map sidecars to ``out``; return counts of what was written."""
+    folder = Path(folder)
+    if robot not in ROBOT_SUBJECTS:
+        raise ValueError(f"MRCLAM robots are numbered 1 to 5, got {robot}")
+    odometry = _table(folder, f"Robot{robot}_Odometry.dat", 3)
+    measurements = _table(folder, f"Robot{robot}_Measurement.dat", 4)
+    truth = _table(folder, f"Robot{robot}_Groundtruth.dat", 4)
+    landmarks = _table(folder, "Landmark_Groundtruth.dat", 5)
+    barcodes = _table(folder, "Barcodes.dat", 2)
+    subject_of = {int(barcode): int(subject) for subject, barcode in barcodes}
+    skipped: Counter[str] = Counter()
+    kept = []
+    for t, barcode, rng, bearing in measurements:
+        subject = subject_of.get(int(barcode))
+        if subject is None:
+            skipped["unknown barcode"] += 1
+        elif subject in ROBOT_SUBJECTS:
+            skipped["another robot"] += 1
+        elif not odometry[0, 0] <= t <= odometry[-1, 0]:
+            skipped["outside the odometry's time span"] += 1
+        else:
+            kept.append((t, subject, rng, bearing))
+    kept.sort()
+    times = np.unique(np.concatenate([odometry[:, 0], [m[0] for m in kept]]))
+    out = Path(out)
+    records = []
+    with LogWriter(out, beams=3) as writer:
+        sample = 0
+        pending = iter(kept)
+        measurement = next(pending, None)
+        pose_time = times[0]
+        for t in times:
+            while sample + 1 < len(odometry) and odometry[sample + 1, 0] <= pose_time:
+                sample += 1
+            speed, turn_rate = odometry[sample, 1], odometry[sample, 2]
+            dt = t - pose_time
+            writer.write_odometry(t, speed * dt, turn_rate * dt)
+            records.append(t)
+            pose_time = t
+            while measurement is not None and measurement[0] == t:
+                writer.write_landmark(t, measurement[1], measurement[2], measurement[3])
+                records.append(t)
+                measurement = next(pending, None)
+    record_times = np.array(records)
+    poses = _interpolate_poses(truth, record_times)
+    sidecars.write_truth(sidecars.truth_path(out), record_times, poses)
+    sidecars.write_map(
+        sidecars.map_path(out),
+        walls=np.empty((0, 4)),
+        corners=landmarks[:, 1:3],
+        sensor={"kind": "landmark range and bearing (monocular camera with barcodes)"},
+        landmark_ids=landmarks[:, 0].astype(int).tolist(),
+        start_pose=poses[0].tolist(),
+        source={"dataset": str(folder), "robot": robot, "ground_truth": "Vicon motion capture"},
+    )
+    return {
+        "records": len(records),
+        "odometry_records": len(times),
+        "landmark_records": len(kept),
+        "skipped": dict(skipped),
+    }
+
+
+def _interpolate_poses(truth: np.ndarray, times: np.ndarray) -> np.ndarray:
+    """Vicon poses (x, y, theta) at ``times``, linearly interpolated (theta unwrapped), clipped to its span."""
+    heading = np.unwrap(truth[:, 3])
+    return np.column_stack(
+        [
+            np.interp(times, truth[:, 0], truth[:, 1]),
+            np.interp(times, truth[:, 0], truth[:, 2]),
+            wrap_angle(np.interp(times, truth[:, 0], heading)),
+        ]
+    )

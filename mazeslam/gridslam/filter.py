@@ -1,0 +1,615 @@
+"""Grid-map Rao-Blackwellised particle filter (Grisetti, Stachniss and Burgard, "Improved techniques
+for grid mapping with Rao-Blackwellized particle filters", IEEE T-RO 2007: the method of gmapping).
+
+Each particle is a robot pose, a log weight and its own occupancy grid (``TiledGrid``, tiles shared
+copy-on-write with its relatives). A scan is processed once the robot has moved ``linear_update``
+metres or turned ``angular_update`` radians since the last processed scan, with the motion
+accumulated in between (``u``). For each particle, at its previous pose ``x'``:
+
+1. predict ``x^ = x' (+) u`` and match the scan against the particle's own map from there
+   (``refine_pose``: likelihood field times the motion prior ``N(x^, Q(u))``), giving the mode ``x*``;
+2. score ``K = 27`` poses ``x_j`` on a 3 x 3 x 3 stencil around ``x*``:
+   ``tau_j = p(z | m, x_j) p(x_j | x', u)``; the proposal is the Gaussian with their
+   ``tau``-weighted mean and covariance, and the new pose is drawn from it;
+3. the weight is multiplied by the normaliser ``eta = sum_j tau_j``.
+
+When the refinement ends with too few end points near occupied cells (the laser odometry
+can be wrong by decimetres and tenths of a radian where a scan alone is ambiguous), an exhaustive
+correlative search over a wide window around ``x^`` (``mazeslam.registration.correlative``, against
+the particle's occupied cells) seeds the refinement again. With ``search = "every-scan"`` the search
+runs once at every scan, over a wider window (``every_scan_sigma``), for logs whose motion between
+scans can be a metre or a right angle wrong (a laser odometry matched without wheel odometry).
+When the match still fails the stencil is centred on ``x^`` for the weight and the pose is drawn
+from the motion model. Then the scan is ray-traced into the particle's map at its new pose. Weights
+are tempered as gmapping does (log weights divided by ``observation_gain`` times the particle
+count) and the particles are resampled (systematic) only when the effective sample size falls
+below ``resample_threshold`` times their count.
+
+The motion ``u`` between scans comes from the project's laser odometry (``laser_odometry``, scan to
+scan ICP with the wheel odometry as prior), or from the log's odometry records alone.
+"""
+
+from __future__ import annotations
+
+import enum
+import itertools
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from mazeslam.core.beams import BeamGeometry
+from mazeslam.core.config import require
+from mazeslam.core.geometry import advance_pose, compose, relative, transform_points, wrap_angle
+from mazeslam.core.motion import OdometryNoise, dead_reckoning, predict_relative
+from mazeslam.core.resampling import effective_sample_size, normalized_weights, systematic_resample
+from mazeslam.data.log import CourseLog
+from mazeslam.gridslam.matching import LikelihoodField, MatchParams, match_points, refine_pose
+from mazeslam.gridslam.occupancy import GridParams, ScanRays, TiledGrid, distinct_tile_bytes, integrate_scan, scan_rays
+from mazeslam.registration.correlative import CorrelativeParams, LikelihoodGrid, correlative_candidates
+from mazeslam.registration.scan_matching import ScanMatchParams, laser_odometry
+
+
+class SearchMode(enum.StrEnum):
+    """When the grid filter runs its wide correlative search (``GridSlamParams.search``)."""
+
+    FAILED_MATCH = "failed-match"  #: for a particle whose scan match fails, over its own map
+    EVERY_SCAN = "every-scan"  #: once a scan, over the best particle's map, seeding every particle's match
+
+
+class MotionSource(enum.StrEnum):
+    """Where the grid filter's motion between scans comes from (``GridSlamParams.motion``)."""
+
+    LASER = "laser"  #: the laser odometry (scan-to-scan matching, the wheels as its prior)
+    WHEELS = "wheels"  #: the log's odometry records chained, at each scan's own time
+
+
+@dataclass(frozen=True)
+class GridSlamParams:
+    """Settings of the grid filter.
+
+    Attributes:
+        particles: particle count.
+        seed: seed of the filter's random draws.
+        grid: the occupancy grid (``GridParams``); match: the matcher (``MatchParams``).
+        motion_noise: noise of the motion ``u`` between processed scans (``OdometryNoise``:
+            sigmaX m/sqrt(m), sigmaTH rad/sqrt(rad), sigmaTH_drive rad/sqrt(m)), plus
+            ``motion_floor`` (m and rad) on each axis. Its x and y variances are equal, so it is the
+            same in the robot and the world frame. The default is the laser odometry's noise
+            measured against the reference poses of the CARMEN logs (the median of the per-log fits,
+            experiments/carmen_grid/results/motion_noise.md; ``mazeslam odometry-noise`` on one
+            log), the floor its prior's (``ScanMatchParams.prior_floor``). The motion NIS
+            (``motion_nis``, printed by the slam command) checks them on any log.
+        linear_update, angular_update: a scan is processed after this much travel (m) or turning
+            (rad) since the last processed scan; others only carry the motion on.
+        kernel_step: spacing (x m, y m, theta rad) of the 3 x 3 x 3 stencil around the match.
+        resample_threshold: resample when the effective sample size is below this fraction.
+        observation_gain: log weights are divided by this times the particle count (gmapping's
+            obsSigmaGain), as the beams of a scan are far from independent.
+        window_margin: the map window read around a scan's reach, and the likelihood field around
+            its matched end points, m (bounds the match's shift).
+        rescue: the correlative search run when a refinement fails; rescue_sigma (m, rad) its
+            window's standard deviation in position and heading (it reaches ``rescue.window_sigmas``
+            of them) and the refinements' prior from its candidates.
+        search: when the wide search runs (``SearchMode``): for a particle whose refinement fails,
+            over its own map, or once at every scan, over the best particle's map (every particle
+            then refines from its prediction and from the search's poses moved onto it, keeping
+            the best, and the failed-match rescue does not run).
+        every_scan_sigma: standard deviations (m, rad) of the every-scan search's window (it
+            reaches ``rescue.window_sigmas`` of them) and of the prior its refinements are chosen
+            by; the proposal's stencil and the weights keep ``motion_noise``'s prior around the motion.
+        motion: where the motion between scans comes from (``MotionSource``): the laser odometry
+            (settings ``laser_odometry``, ``[scan_matching]``) or the log's odometry records chained.
+    """
+
+    particles: int = 30
+    seed: int = 0
+    grid: GridParams = field(default_factory=GridParams)
+    match: MatchParams = field(default_factory=MatchParams)
+    motion_noise: OdometryNoise = field(default_factory=lambda: OdometryNoise(0.04, 0.02, 0.008))
+    motion_floor: float = 0.01
+    linear_update: float = 0.5
+    angular_update: float = 0.25
+    kernel_step: tuple = (0.02, 0.02, 0.01)
+    resample_threshold: float = 0.5
+    observation_gain: float = 3.0
+    window_margin: float = 1.5
+    rescue: CorrelativeParams = field(
+        default_factory=lambda: CorrelativeParams(resolution=0.1, sigma=0.1, turn_step=2.0, candidates=3, max_points=90)
+    )
+    rescue_sigma: tuple = (0.4, 0.3)
+    search: SearchMode = SearchMode.FAILED_MATCH
+    every_scan_sigma: tuple = (0.4, 0.7)
+    motion: MotionSource = MotionSource.LASER
+    laser_odometry: ScanMatchParams = field(default_factory=lambda: ScanMatchParams(enabled=True))
+
+    def __post_init__(self):
+        object.__setattr__(self, "kernel_step", tuple(self.kernel_step))
+        object.__setattr__(self, "rescue_sigma", tuple(self.rescue_sigma))
+        object.__setattr__(self, "every_scan_sigma", tuple(self.every_scan_sigma))
+        require(self.particles >= 1, "particles must be at least 1")
+        object.__setattr__(self, "search", _member(SearchMode, self.search, "search"))
+        object.__setattr__(self, "motion", _member(MotionSource, self.motion, "motion"))
+        for name in ("rescue_sigma", "every_scan_sigma"):
+            value = getattr(self, name)
+            require(len(value) == 2 and all(v > 0 for v in value), f"{name}: 2 positive values (m, rad), got {value}")
+        require(self.linear_update >= 0 and self.angular_update >= 0, "update thresholds must be >= 0")
+        require(len(self.kernel_step) == 3 and all(s > 0 for s in self.kernel_step), "kernel_step: 3 positive steps")
+        require(0 <= self.resample_threshold <= 1, "resample_threshold must be a fraction")
+        require(
+            self.observation_gain > 0 and self.motion_floor > 0, "observation_gain and motion_floor must be positive"
+        )
+
+    @property
+    def rescue_covariance(self) -> np.ndarray:
+        """Covariance (3, 3) of the rescue search's window (see ``rescue_sigma``)."""
+        return _window_covariance(self.rescue_sigma)
+
+    @property
+    def every_scan_covariance(self) -> np.ndarray:
+        """Covariance (3, 3) of the search's window when it runs at every scan (``every_scan_sigma``)."""
+        return _window_covariance(self.every_scan_sigma)
+
+    def motion_covariance(self, motion: np.ndarray) -> np.ndarray:
+        """Covariance (3, 3) of a motion ``(dx, dy, dtheta)`` between processed scans."""
+        return self.motion_noise.relative_covariance(motion) + self.motion_floor**2 * np.eye(3)
+
+
+def _member(kind: type[enum.Enum], value, name: str):
+    """``value`` as a member of the Enum ``kind``; a ValueError naming the setting and its choices."""
+    try:
+        return kind(value)
+    except ValueError:
+        choices = ", ".join(repr(member.value) for member in kind)
+        raise ValueError(f"{name} must be one of {choices}, got {value!r}") from None
+
+
+def _window_covariance(sigma: tuple) -> np.ndarray:
+    """Diagonal covariance (3, 3) of a search window with standard deviations ``(m, rad)``."""
+    xy, theta = sigma
+    return np.diag([xy**2, xy**2, theta**2])
+
+
+@dataclass(frozen=True)
+class ScanUpdate:
+    """What one processed scan did to the cloud.
+
+    Attributes:
+        matched: share of the particles whose match was accepted.
+        nis: the motion's normalised innovation squared (``motion_nis``), averaged over the
+            particles whose match was accepted with their weights before the scan (NaN when
+            less than half the weight matched).
+        neff: effective sample size after the scan's weighting, before any resampling.
+        indexes: (P,) the resampling's kept particles, or None without resampling.
+    """
+
+    matched: float
+    nis: float
+    neff: float
+    indexes: np.ndarray | None
+
+
+def motion_nis(matched: np.ndarray, predicted: np.ndarray, covariance: np.ndarray) -> float:
+    """How far the scan match moved a particle from its prediction, against the motion's noise:
+    ``d^T Q^-1 d`` for ``d = matched - predicted`` (3,) (world frame, heading wrapped) and the
+    motion's covariance ``Q`` (3, 3) (x and y variances equal, so it is the same in the world
+    frame). Where ``Q`` states the laser odometry's error right, it averages 3 (3 degrees of
+    freedom, chi-square 95 % point 7.81): much less, ``Q`` is wider than the errors the scans
+    correct; much more, narrower. It needs no truth."""
+    offset = matched - predicted
+    offset[2] = wrap_angle(offset[2])
+    return float(offset @ np.linalg.solve(covariance, offset))
+
+
+def _weighted_nis(nis: np.ndarray, weights: np.ndarray) -> float:
+    """The ``weights``-average (P,) of the particles' finite ``nis`` (P,); NaN when those hold less
+    than half the weight."""
+    finite = np.isfinite(nis)
+    if weights[finite].sum() <= 0.5:
+        return float("nan")
+    return float(np.average(nis[finite], weights=weights[finite]))
+
+
+#: The stencil of the proposal: every combination of -1, 0, +1 steps in x, y and theta, (27, 3).
+STENCIL = np.array(list(itertools.product((-1.0, 0.0, 1.0), repeat=3)))
+
+
+@dataclass(frozen=True)
+class ScanSensor:
+    """How a log's scans are turned into points: bearings (N,) rad and sensor mount (2,), robot
+    frame; max_range, the sensor's maximum range (m, 0 unknown), how far a beam with no return
+    clears the map (``GridParams.clear_no_return``, ``scan_rays``)."""
+
+    bearings: np.ndarray
+    mount: np.ndarray
+    max_range: float = 0.0
+
+    @classmethod
+    def of(cls, geometry: BeamGeometry, beams: int, max_range: float = 0.0) -> ScanSensor:
+        return cls(geometry.bearings(beams), np.array([geometry.mount_x, geometry.mount_y]), max_range)
+
+
+class GridSlam:
+    """The particle cloud: poses (P, 3) world frame, log weights (P,), maps (P ``TiledGrid``) and
+    each path's summed log likelihood (P,) (``best_particle``)."""
+
+    def __init__(self, params: GridSlamParams, start_pose, sensor: ScanSensor):
+        self.params, self.sensor = params, sensor
+        self.search_every_scan = params.search == SearchMode.EVERY_SCAN
+        count = params.particles
+        self.poses = np.tile(np.asarray(start_pose, dtype=float), (count, 1))
+        self.log_weights = np.zeros(count)
+        self.log_likelihoods = np.zeros(count)
+        self.maps = [TiledGrid(params.grid) for _ in range(count)]
+        self.rng = np.random.default_rng(params.seed)
+        self.resamplings = 0
+
+    @property
+    def weights(self) -> np.ndarray:
+        return normalized_weights(self.log_weights)
+
+    def best_particle(self) -> int:
+        """The particle whose path explains the scans best: the highest ``log_likelihoods``, the
+        sum of its and its ancestors' untempered ``log eta`` over the whole run (gmapping's
+        ``weightSum``). The weights alone restart at every resampling, so they cannot tell."""
+        return int(np.argmax(self.log_likelihoods))
+
+    def process(self, ranges: np.ndarray, motion: np.ndarray) -> ScanUpdate:
+        """Move every particle by ``motion`` (3,) (robot frame, since the last processed scan) with
+        the improved proposal, weigh it, add the scan (``ranges`` (N,) m) to its map and resample
+        if needed."""
+        clears_to = self.sensor.max_range if self.params.grid.clear_no_return else 0.0
+        rays = scan_rays(ranges, self.sensor.bearings, self.sensor.mount, self.params.grid, clears_to)
+        trusted = np.where(ranges >= self.params.grid.min_range, ranges, 0.0)
+        points = match_points(trusted, self.sensor.bearings, self.sensor.mount, self.params.match)
+        covariance = self.params.motion_covariance(motion)
+        information = np.linalg.inv(covariance)
+        offsets = self._searched_offsets(points, motion, rays) if self.search_every_scan else np.zeros((0, 3))
+        log_etas, nis, matched = np.zeros(len(self.poses)), np.full(len(self.poses), np.nan), 0
+        weights = self.weights
+        for index, grid in enumerate(self.maps):
+            predicted = compose(self.poses[index], motion)
+            starts = np.vstack([predicted, compose(predicted, offsets).reshape(-1, 3)])  # (1 + C, 3)
+            reach = np.vstack([transform_points(start, rays.reach) for start in starts] + [starts[:, :2]])
+            window = grid.window(*grid.tile_range(reach, self.params.window_margin))
+            if grid.tiles and len(points) >= 3:
+                seen = np.vstack([transform_points(start, points) for start in starts])
+                field = LikelihoodField(window.crop(seen, self.params.window_margin), self.params.match)
+                if field.has_occupied:
+                    pose, log_etas[index], accepted = self._propose(
+                        field, points, predicted, information, starts if self.search_every_scan else None
+                    )
+                    if accepted:
+                        nis[index] = motion_nis(pose, predicted, covariance)
+                    else:
+                        pose = self._unmatched_draw(index, motion, covariance)
+                    matched += accepted
+                    self.poses[index] = pose
+                else:
+                    self.poses[index] = self._unmatched_draw(index, motion, covariance)
+            else:
+                self.poses[index] = self._unmatched_draw(index, motion, covariance)
+            grid.store(window, integrate_scan(window, rays, self.poses[index], self.params.grid))
+        self.log_likelihoods += log_etas - log_etas.max()
+        self.log_weights += (log_etas - log_etas.max()) / (self.params.observation_gain * len(self.poses))
+        return ScanUpdate(
+            matched / len(self.poses),
+            _weighted_nis(nis, weights),
+            effective_sample_size(self.weights),
+            self._resample_if_needed(),
+        )
+
+    def _unmatched_draw(self, index: int, motion: np.ndarray, covariance: np.ndarray) -> np.ndarray:
+        """The pose (3,) of particle ``index`` moved by ``motion`` (3,) with noise where its match failed
+        or nothing of its map lies near the scan: ``covariance`` (3, 3), or, before its first scan, the motion noise
+        alone, without ``motion_floor``. The floor stands for the laser odometry's errors between
+        scans; the motion to the first scan is odometry from the known start pose (none when the
+        first record is a scan), and a floor there would turn each particle's whole map by its
+        draw. Drawn at all, not taken as it is, because the map's frame inherits that motion's
+        error: on the simulated building the first 0.5 m (0.01 rad off) taken without noise left
+        the mean path's pose NEES at 17-40 (3 is consistent)."""
+        if not self.maps[index].tiles:
+            covariance = self.params.motion_noise.relative_covariance(motion)
+        return predict_relative(self.poses[index][None], motion, covariance, self.rng)[0]
+
+    def _propose(
+        self,
+        field: LikelihoodField,
+        points: np.ndarray,
+        predicted: np.ndarray,
+        information: np.ndarray,
+        seeds: np.ndarray | None = None,
+    ) -> tuple[np.ndarray, float, bool]:
+        """The improved proposal of one particle: the drawn pose (3,), ``log eta`` and whether the
+        match was accepted (if not, the pose is the stencil's centre and the caller draws one).
+        ``seeds`` (C, 3): where the refinements start when the particles search at every scan (the
+        prediction and the scan's searched poses moved onto it, ``_searched_offsets``)."""
+        match = self.params.match
+        if seeds is not None:
+            wide = np.linalg.inv(self.params.every_scan_covariance)
+            mode = self._best_refinement(field, points, predicted, wide, seeds)
+        else:
+            mode = refine_pose(field, points, predicted, information, match)
+            if field.overlap(mode, points, match) < match.min_overlap:
+                mode = self._rescue(field, points, predicted, self.params.rescue_covariance)
+        accepted = field.overlap(mode, points, match) >= match.min_overlap
+        centre = mode if accepted else predicted
+        stencil = centre + STENCIL * self.params.kernel_step
+        log_tau = field.objective(stencil, points, predicted, information, match)
+        log_eta = float(log_tau.max() + np.log(np.exp(log_tau - log_tau.max()).sum()))
+        if not accepted:
+            return centre, log_eta, False
+        weights = np.exp(log_tau - log_eta)
+        spread = STENCIL * self.params.kernel_step
+        mean = weights @ spread
+        covariance = (spread - mean).T @ ((spread - mean) * weights[:, None]) + 1e-10 * np.eye(3)
+        pose = centre + self.rng.multivariate_normal(mean, covariance, method="eigh")
+        pose[2] = wrap_angle(pose[2])
+        return pose, log_eta, True
+
+    def _rescue(
+        self, field: LikelihoodField, points: np.ndarray, predicted: np.ndarray, covariance: np.ndarray
+    ) -> np.ndarray:
+        """The best pose (3,) of the refinements seeded by ``predicted`` (3,) and by a correlative
+        search around it over the particle's occupied cells, by likelihood times the prior
+        ``N(predicted, covariance)`` (3, 3) that also sets the search's window."""
+        seeds = np.vstack([predicted, self._search(field, points, predicted, covariance)])
+        return self._best_refinement(field, points, predicted, np.linalg.inv(covariance), seeds)
+
+    def _search(
+        self, field: LikelihoodField, points: np.ndarray, predicted: np.ndarray, covariance: np.ndarray
+    ) -> np.ndarray:
+        """The correlative search's best poses (C, 3) for ``points`` (N, 2) (robot frame) over
+        ``field``'s occupied cells, in the window and under the prior ``N(predicted, covariance)``."""
+        search = self.params.rescue
+        return correlative_candidates(
+            LikelihoodGrid(field.occupied_points(), search), points, predicted, covariance, search
+        )
+
+    def _best_refinement(
+        self,
+        field: LikelihoodField,
+        points: np.ndarray,
+        predicted: np.ndarray,
+        information: np.ndarray,
+        seeds: np.ndarray,
+    ) -> np.ndarray:
+        """The best pose (3,) of the refinements from ``seeds`` (C, 3), by likelihood times the
+        prior ``N(predicted, information^-1)`` (information (3, 3))."""
+        refined = np.array(
+            [refine_pose(field, points, predicted, information, self.params.match, seed) for seed in seeds]
+        )
+        return refined[np.argmax(field.objective(refined, points, predicted, information, self.params.match))]
+
+    def _searched_offsets(self, points: np.ndarray, motion: np.ndarray, rays: ScanRays) -> np.ndarray:
+        """The search at every scan, run once: the correlative search's candidates (C, 3) for the
+        scan's ``points`` over the best particle's map, around its pose moved by ``motion`` (window
+        ``every_scan_sigma``), as poses relative to that prediction. Every particle refines from
+        them, moved onto its own prediction, against its own map: the particles' maps share most
+        tiles, and one search a scan costs a small part of one per particle. The map is read as far
+        as the scan reaches around the prediction in any direction (a turned candidate's points lie
+        there)."""
+        best = self.best_particle()
+        grid, predicted = self.maps[best], compose(self.poses[best], motion)
+        if not grid.tiles or len(points) < 3:
+            return np.zeros((0, 3))
+        radius = np.hypot(*rays.reach.T).max(initial=0.0)
+        disc = predicted[:2] + np.array([[-radius, -radius], [radius, radius]])
+        field = LikelihoodField(grid.window(*grid.tile_range(disc, self.params.window_margin)), self.params.match)
+        if not field.has_occupied:
+            return np.zeros((0, 3))
+        candidates = self._search(field, points, predicted, self.params.every_scan_covariance)
+        return relative(predicted, candidates).reshape(-1, 3)
+
+    def _resample_if_needed(self) -> np.ndarray | None:
+        """Systematic resampling when the effective sample size is low: the kept indexes, or None."""
+        weights = self.weights
+        if effective_sample_size(weights) >= self.params.resample_threshold * len(weights):
+            return None
+        indexes = systematic_resample(weights, self.rng)
+        self.poses = self.poses[indexes]
+        self.log_likelihoods = self.log_likelihoods[indexes]
+        self.maps = [self.maps[index].copy() for index in indexes]
+        self.log_weights = np.zeros(len(indexes))
+        self.resamplings += 1
+        return indexes
+
+    def cloud(self, pending: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The particles moved on by ``pending`` (3,), the motion not processed yet: poses (P, 3),
+        their weighted mean (3,) and covariance (3, 3) (headings around the mean's)."""
+        poses = compose(self.poses, pending)
+        weights = self.weights
+        heading = np.angle(weights @ np.exp(1j * poses[:, 2]))
+        deviation = poses - np.r_[weights @ poses[:, :2], heading]
+        deviation[:, 2] = wrap_angle(deviation[:, 2])
+        mean = np.r_[weights @ poses[:, :2], heading]
+        return poses, mean, (deviation * weights[:, None]).T @ deviation
+
+
+@dataclass
+class GridSlamResult:
+    """A grid filter run over a log.
+
+    Attributes:
+        scan_records: (S,) record numbers of the log's scans; times (S,) their times, s.
+        best_poses: (S, 3) the path of the final best particle at every scan (consistent with
+            ``grid``); mean_poses (S, 3) the cloud's weighted mean after each scan and covariances
+            (S, 3, 3) its spread. World frame, m and rad.
+        processed: (S,) the scan was matched and mapped (else the robot had not moved enough).
+        matched: (S,) share of the particles whose match was accepted (NaN where not processed).
+        nis: (S,) the motion's NIS (``ScanUpdate.nis``; NaN where not processed or not matched).
+        neff: (S,) effective sample size after the scan's weighting, before any resampling.
+        resampled: (S,) the particles were resampled after the scan.
+        grid: the final best particle's map.
+        seconds: (S,) wall-clock seconds of each scan; motion_seconds the laser odometry's.
+        peak_map_bytes: the most bytes of cells all particles' maps held together after a scan
+            (shared tiles counted once).
+        particles: the final cloud (for inspection).
+        reckoned: (R, 3) the odometry the filter moved by, from ``reckoned_start`` (3,), at every
+            record's time (``odometry_at_record_times``): what carries a scan's pose on to the
+            records after it.
+        snapshots: the frames kept for ``--animate`` (``mazeslam.gridslam.snapshots.GridSnapshot``).
+    """
+
+    scan_records: np.ndarray
+    times: np.ndarray
+    best_poses: np.ndarray
+    mean_poses: np.ndarray
+    covariances: np.ndarray
+    processed: np.ndarray
+    matched: np.ndarray
+    nis: np.ndarray
+    neff: np.ndarray
+    resampled: np.ndarray
+    grid: TiledGrid
+    seconds: np.ndarray
+    motion_seconds: float
+    peak_map_bytes: int
+    particles: GridSlam
+    reckoned: np.ndarray
+    reckoned_start: np.ndarray
+    snapshots: list = field(default_factory=list)
+
+    @property
+    def resamplings(self) -> int:
+        return int(self.resampled.sum())
+
+    @property
+    def total_seconds(self) -> float:
+        return float(self.seconds.sum() + self.motion_seconds)
+
+    def record_trajectory(self, which: str = "best") -> tuple[np.ndarray, np.ndarray]:
+        """Poses (R, 3) and covariances (R, 3, 3) at every record of the log, as
+        ``sidecars.write_trajectory`` takes them: a record gets the pose of the last scan at or
+        before it moved on by the odometry since (the start pose moved so before the first scan, with
+        zero covariance), the covariance of that scan. ``which``: "best" or "mean"."""
+        scan_poses = {"best": self.best_poses, "mean": self.mean_poses}[which]
+        latest = np.searchsorted(self.scan_records, np.arange(len(self.reckoned)), side="right") - 1
+        scanned = latest[:, None] >= 0
+        anchor = np.where(scanned, scan_poses[np.maximum(latest, 0)], self.reckoned_start)
+        reckoned_anchor = np.where(
+            scanned, self.reckoned[self.scan_records[np.maximum(latest, 0)]], self.reckoned_start
+        )
+        poses = compose(anchor, relative(reckoned_anchor, self.reckoned))
+        covariances = np.where(latest[:, None, None] >= 0, self.covariances[np.maximum(latest, 0)], 0.0)
+        return poses, covariances
+
+
+def odometry_at_record_times(course_log: CourseLog, start_pose) -> np.ndarray:
+    """The pose (R, 3) at every record's own time by the odometry, world frame.
+
+    An odometry record's pose is the odometry integrated up to it. Any other record (a scan) falls
+    between two odometry records: it gets the earlier one's pose advanced by the share of the later
+    one's motion its time says, ``(t - t_before) / (t_after - t_before)`` (none before the first or
+    after the last odometry record). The course robot's logger takes a scan 0.2-0.3 s after the
+    odometry record before it: turning at 0.26 rad/s, that is 3-4 deg a scan, which, put into the
+    map with the scan, turns the map a little at every scan of a turn."""
+    poses = dead_reckoning(course_log, start_pose)
+    odometry = np.flatnonzero(course_log.is_odometry)
+    others = np.flatnonzero(~course_log.is_odometry)
+    after = np.searchsorted(odometry, others)
+    inside = (after > 0) & (after < len(odometry))
+    others, after = others[inside], odometry[after[inside]]
+    before = odometry[np.searchsorted(odometry, others) - 1]
+    times = course_log.times
+    share = np.clip((times[others] - times[before]) / np.maximum(times[after] - times[before], 1e-9), 0.0, 1.0)
+    distance, turn = course_log.values[after, 0], course_log.values[after, 1]
+    poses[others] = advance_pose(poses[before], share * distance, share * turn)
+    return poses
+
+
+def scan_motions(course_log: CourseLog, geometry: BeamGeometry, params: GridSlamParams, start_pose) -> np.ndarray:
+    """The motion (S, 3) before each scan (robot frame of the previous scan; the first from the
+    start pose): the laser odometry's, or the odometry between the scans' times
+    (``odometry_at_record_times``; ``params.motion``)."""
+    if params.motion == MotionSource.LASER:
+        return laser_odometry(course_log, geometry, params.laser_odometry).increments
+    at_scans = odometry_at_record_times(course_log, start_pose)[course_log.is_scan]
+    start = np.asarray(start_pose, dtype=float)[None]
+    return relative(np.vstack([start, at_scans[:-1]]), at_scans).reshape(-1, 3)
+
+
+def run_grid_slam(
+    course_log: CourseLog,
+    geometry: BeamGeometry,
+    start_pose,
+    params: GridSlamParams | None = None,
+    progress: bool = False,
+    snapshot_every: int = 0,
+    sensor_max_range: float = 0.0,
+    on_scan=None,
+) -> GridSlamResult:
+    """The grid filter over every scan of ``course_log`` (see the module docstring). With
+    ``snapshot_every`` > 0, every that many scans (and at the last) the best particle's map and the
+    particles are kept for ``--animate`` (``GridSlamResult.snapshots``). ``sensor_max_range``: the
+    laser's maximum range (m), up to which a beam with no return clears the map with
+    ``params.grid.clear_no_return`` (0: unknown, such beams are left out). ``on_scan(record_index,
+    filter)``, when given, is called after every scan with the ``GridSlam`` (for a live view:
+    ``mazeslam.viz.live``); it must not change the filter."""
+    params = params or GridSlamParams()
+    began = time.perf_counter()
+    motions = scan_motions(course_log, geometry, params, start_pose)
+    motion_seconds = time.perf_counter() - began
+    records = np.flatnonzero(course_log.is_scan)
+    count, particles = len(records), params.particles
+    sensor = ScanSensor.of(geometry, course_log.width, sensor_max_range)
+    slam = GridSlam(params, start_pose, sensor)
+    node_poses, node_parents = np.empty((count, particles, 3)), np.empty((count, particles), dtype=int)
+    mean_poses, covariances = np.empty((count, 3)), np.empty((count, 3, 3))
+    processed, resampled = np.zeros(count, bool), np.zeros(count, bool)
+    matched, nis, neff = np.full(count, np.nan), np.full(count, np.nan), np.full(count, float(particles))
+    seconds = np.empty(count)
+    pending, peak_map_bytes, snapshots = np.zeros(3), 0, []
+    from tqdm.auto import tqdm  # here: the slam config names the grid's settings, and tqdm is slow to load
+
+    for index in tqdm(range(count), desc="grid SLAM", unit="scan", disable=not progress):
+        started = time.perf_counter()
+        pending = compose(pending, motions[index])
+        parents = np.arange(particles)
+        if index == 0 or np.hypot(*pending[:2]) >= params.linear_update or abs(pending[2]) >= params.angular_update:
+            update = slam.process(course_log.values[records[index]], pending)
+            matched[index], nis[index], neff[index] = update.matched, update.nis, update.neff
+            processed[index], pending = True, np.zeros(3)
+            peak_map_bytes = max(peak_map_bytes, distinct_tile_bytes(slam.maps))
+            if update.indexes is not None:
+                parents, resampled[index] = update.indexes, True
+        node_poses[index], mean_poses[index], covariances[index] = slam.cloud(pending)
+        node_parents[index] = parents
+        seconds[index] = time.perf_counter() - started
+        if snapshot_every and (index % snapshot_every == 0 or index == count - 1):
+            from mazeslam.gridslam.snapshots import snapshot
+
+            snapshots.append(snapshot(index, slam.maps[slam.best_particle()], node_poses[index]))
+        if on_scan is not None:
+            on_scan(int(records[index]), slam)
+    best = slam.best_particle()
+    return GridSlamResult(
+        records,
+        course_log.times[records],
+        _backtrack(node_poses, node_parents, best),
+        mean_poses,
+        covariances,
+        processed,
+        matched,
+        nis,
+        neff,
+        resampled,
+        slam.maps[best],
+        seconds,
+        motion_seconds,
+        peak_map_bytes,
+        slam,
+        odometry_at_record_times(course_log, start_pose),
+        np.asarray(start_pose, dtype=float),
+        snapshots,
+    )
+
+
+def _backtrack(node_poses: np.ndarray, node_parents: np.ndarray, particle: int) -> np.ndarray:
+    """The path (S, 3) of ``particle`` through the ancestry: ``node_poses`` (S, P, 3) holds every
+    particle's pose at each scan, ``node_parents`` (S, P) the index at the scan before of its ancestor."""
+    path = np.empty((len(node_poses), 3))
+    for index in range(len(node_poses) - 1, -1, -1):
+        path[index] = node_poses[index, particle]
+        particle = node_parents[index, particle]
+    return path

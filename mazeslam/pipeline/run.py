@@ -1,0 +1,49 @@
+"""``run_slam``: the one entry to SLAM on a log, whichever filter ``[map] kind`` names."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from mazeslam.data.beam_detection import with_detected_convention
+from mazeslam.data.loaded_run import LoadedRun, load_run
+from mazeslam.pipeline.config import MapKind, SlamConfig
+from mazeslam.pipeline.fastslam_run import fastslam_on_run
+from mazeslam.pipeline.grid_run import grid_on_run
+from mazeslam.pipeline.result import SlamResult
+from mazeslam.registration.scan_matching import LaserOdometry
+
+
+def run_slam(
+    run: LoadedRun,
+    config: SlamConfig | None = None,
+    progress: bool = True,
+    snapshot_every: int = 0,
+    laser: LaserOdometry | None = None,
+    on_update=None,
+) -> SlamResult:
+    """The filter ``config.map.kind`` names over the loaded log ``run``: corner FastSLAM
+    (``[fastslam]``, ``fastslam_on_run``) or the grid filter (``[grid]``, ``grid_on_run``).
+
+    Args:
+        run: the log, its beam geometry, start pose and sidecars (``load_run``).
+        config: every setting (``SlamConfig``; the defaults when None).
+        progress: draw a progress bar.
+        snapshot_every: keep a frame for an animation every that many observation updates (0: none).
+        laser: corner FastSLAM's laser odometry of this log, if already matched (it does not depend
+            on the filter's seed, so runs over several seeds can share it).
+        on_update: ``on_update(record_index, filter)`` after every observation update (the
+            ``FastSLAM`` or the ``GridSlam``), for a live view (``mazeslam.viz.live``); it must not
+            change the filter.
+    """
+    config = config or SlamConfig()
+    if config.map.kind == MapKind.GRID:
+        return grid_on_run(run, config, progress, snapshot_every, on_update)
+    return fastslam_on_run(run, config, progress, snapshot_every, laser, on_update)
+
+
+def slam_on_file(path: str | Path, config: SlamConfig | None = None, progress: bool = True) -> SlamResult:
+    """``run_slam`` on a log file, as ``mazeslam slam`` runs it: its sidecars read beside it,
+    ``[sensor]`` applied, and the beam convention detected from its scans when neither says it
+    (``with_detected_convention``)."""
+    config = config or SlamConfig()
+    return run_slam(with_detected_convention(load_run(path, config.sensor), config), config, progress)

@@ -1,0 +1,134 @@
+"""``slam --live`` with a non-interactive backend: the view draws off-screen at a bounded rate and
+says there is no window."""
+
+import time
+
+import pytest
+from click.testing import CliRunner
+
+from mazeslam.cli.main import main
+from mazeslam.core.config import with_settings
+from mazeslam.data.loaded_run import load_run
+from mazeslam.pipeline import SlamConfig, run_slam
+
+
+@pytest.fixture(scope="module")
+def short_log(tmp_path_factory):
+    from mazeslam import simulate
+
+    out = tmp_path_factory.mktemp("live") / "short.log"
+    simulate(out, seed=4, duration=15.0, progress=False)
+    return out
+
+
+def test_live_view_counts_frames_off_screen(short_log, monkeypatch):
+    monkeypatch.setenv("MPLBACKEND", "Agg")
+    from mazeslam.viz.live import LiveView
+
+    run = load_run(short_log)
+    view = LiveView(run, SlamConfig().corners, "short.log", max_fps=1000.0)
+    assert not view.window and "--animate" in view.message
+    began = time.perf_counter()
+    result = run_slam(run, progress=False, on_update=view)
+    seconds = time.perf_counter() - began
+    assert 1 <= view.frames <= len(result.reports)
+    # Drawing takes at most about half the time (a frame waits as long as the last one took).
+    assert view.drawing_seconds <= 0.5 * seconds + view.drawing_seconds / view.frames + 0.1
+    assert len(view.view.particles.get_xdata()) == result.filter.poses.shape[0]
+    assert view.view.ax.get_xlabel() == "x [m]"
+    view.close()
+
+
+def test_frame_rate_is_bounded(short_log, monkeypatch):
+    monkeypatch.setenv("MPLBACKEND", "Agg")
+    from mazeslam.viz.live import LiveView
+
+    run = load_run(short_log)
+    view = LiveView(run, SlamConfig().corners, max_fps=2.0)
+    began = time.perf_counter()
+    run_slam(run, progress=False, on_update=view)
+    assert view.frames <= 2.0 * (time.perf_counter() - began) + 1
+    view.close()
+
+
+def test_slam_live_without_a_display_says_so(short_log, tmp_path, monkeypatch):
+    monkeypatch.setenv("MPLBACKEND", "Agg")
+    result = CliRunner().invoke(main, ["slam", str(short_log), "--live", "--quiet", "--out", str(tmp_path / "out")])
+    assert result.exit_code == 0, result.output
+    assert "no display" in result.output and "--animate" in result.output
+    assert "Live view:" in result.output
+    assert (tmp_path / "out" / "slam.png").stat().st_size > 10_000  # the figures still go to files
+
+
+def test_the_grid_filter_live_draws_its_map_path_and_particles(short_log, tmp_path, monkeypatch):
+    """``slam --live`` under ``[map] kind = "grid"``: the grid filter's view, its final frame the
+    filter's best map with every particle and the mean path at every scan."""
+    monkeypatch.setenv("MPLBACKEND", "Agg")
+    from mazeslam.viz.live import GridLiveView
+
+    run = load_run(short_log)
+    config = with_settings(SlamConfig(), {"map.kind": "grid", "grid.particles": 3, "grid.linear_update": 0.1})
+    view = GridLiveView(run, "short.log", max_fps=1000.0)
+    assert not view.window and "--animate" in view.message
+    result = run_slam(run, config, progress=False, on_update=view)
+    scans = int(run.log.is_scan.sum())
+    assert 1 <= view.frames <= scans and len(view.path) == scans
+    view.close(len(run.log) - 1, result.filter)
+    assert len(view.view.cloud.get_xdata()) == 3 and len(view.view.path_line.get_xdata()) == scans
+    assert view.view.image.get_array().size > 1  # the map, not the empty start image
+    options = ["slam", str(short_log), "--live", "--quiet", "--map", "grid", "--particles", "3"]
+    output = CliRunner().invoke(main, [*options, "--out", str(tmp_path / "out")]).output
+    assert "Live view:" in output and "corner FastSLAM only" not in output
+
+
+def test_corners_live_without_a_display_says_so(short_log, monkeypatch):
+    monkeypatch.setenv("MPLBACKEND", "Agg")
+    result = CliRunner().invoke(main, ["corners", str(short_log), "--live", "--max-fps", "1000"])
+    assert result.exit_code == 0, result.output
+    assert "no display" in result.output and "--plot" in result.output and "--animate" in result.output
+    assert "Live view:" in result.output and "scans of" in result.output
+
+
+def test_corners_live_view_draws_the_current_scan_at_a_bounded_rate(short_log, monkeypatch):
+    monkeypatch.setenv("MPLBACKEND", "Agg")
+    from mazeslam.data.scans import load_scans
+    from mazeslam.viz.corner_report import CornerReport
+    from mazeslam.viz.live import CornersLiveView
+
+    view = CornersLiveView(load_scans(short_log), max_fps=1000.0)
+    assert not view.window
+    report = CornerReport.from_log(short_log, progress=False, on_scan=view)
+    assert 1 <= view.frames <= len(report.features)
+    last = report.features[-1]
+    view.close(report)
+    # The last frame is the last scan: its points, one line per segment, the robot pointing along +x.
+    assert len(view.view.points.get_xdata()) == len(last.points)
+    assert len(view.view.lines.get_segments()) == len(last.segments)
+    assert view.view.ax.get_xlabel() == "x forward [m]"
+    assert "scan" in view.view.ax.get_title()
+
+    slow = CornersLiveView(load_scans(short_log), max_fps=2.0)
+    began = time.perf_counter()
+    CornerReport.from_log(short_log, progress=False, on_scan=slow)
+    assert slow.frames <= 2.0 * (time.perf_counter() - began) + 1
+    slow.close()
+
+
+def test_corners_live_in_a_window_shows_every_scan_at_the_frame_rate(short_log, monkeypatch):
+    """With a window, extraction waits for it: every scan is drawn, at most max_fps a second."""
+    import matplotlib.pyplot as plt
+
+    from mazeslam.data.scans import load_scans
+    from mazeslam.viz import live
+    from mazeslam.viz.corner_report import CornerReport
+
+    waits: list[float] = []
+    monkeypatch.setenv("MPLBACKEND", "Agg")
+    monkeypatch.setattr(live, "choose_backend", lambda: (True, "agg"))
+    monkeypatch.setattr(plt, "pause", lambda seconds: waits.append(seconds))
+    view = live.CornersLiveView(load_scans(short_log), max_fps=50.0)
+    assert view.window and view.message is None
+    report = CornerReport.from_log(short_log, progress=False, on_scan=view)
+    assert view.frames == len(report.features)
+    assert waits and max(waits) <= 1 / 50.0 + 1e-9
+    view.close(report)
