@@ -1,6 +1,6 @@
 """What happens to the particle set when the robot moves without observations, and when they return.
 
-    python experiments/blind_cloud/run.py        (writes results/ beside this file, ~10 s)
+    python -m experiments.blind_cloud.run        (writes results/ beside this file, ~10 s)
 
 The default simulated run (seed 0) is replayed through FastSLAM 1.0 (the exercise's version; FastSLAM
 2.0, the default, draws no pose until a scan returns, so its particles do not spread while blind) with
@@ -30,10 +30,11 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 import pandas as pd  # noqa: E402
 
-from mazeslam import log, sidecars, simulate  # noqa: E402
-from mazeslam.filters.corners import CornerExtractor  # noqa: E402
-from mazeslam.filters.fastslam import FastSLAM, FastSLAMParams  # noqa: E402
-from mazeslam.geometry import wrap_angle  # noqa: E402
+from mazeslam import simulate  # noqa: E402
+from mazeslam.core.geometry import wrap_angle  # noqa: E402
+from mazeslam.data import log, sidecars
+from mazeslam.fastslam.filter import FastSLAM, FastSLAMParams  # noqa: E402
+from mazeslam.features.corners import CornerExtractor  # noqa: E402
 
 HERE = Path(__file__).resolve().parent
 BLIND_FROM, BLIND_UNTIL = 20.0, 60.0  # seconds

@@ -1,7 +1,7 @@
 """Where the default noise settings come from: ``mazeslam calibrate`` on simulated default mazes
 (against their truth), seeds 11-20, and the median and largest value of each setting.
 
-    python experiments/calibration/run.py
+    python -m experiments.calibration.run
 
 Writes ``results.csv`` (one row per seed) and ``summary.md`` (medians and largest values, with the simulator's own
 noise beside them for the laser) beside this script.
@@ -10,16 +10,16 @@ noise beside them for the laser) beside this script.
 from __future__ import annotations
 
 import tempfile
-from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 
 import pandas as pd
 
 from mazeslam import simulate
-from mazeslam.envs.simulator import SimulationConfig
-from mazeslam.evaluation.calibration import calibrate
-from mazeslam.loaded_run import load_run
-from mazeslam.slam import SlamConfig
+from mazeslam.calibration.noise import calibrate
+from mazeslam.data.loaded_run import load_run
+from mazeslam.pipeline import SlamConfig
+from mazeslam.sim.simulator import SimulationConfig
+from mazeslam.sweeps.pool import map_parallel
 
 HERE = Path(__file__).resolve().parent
 SEEDS = list(range(11, 21))
@@ -46,8 +46,7 @@ def one_seed(seed: int) -> dict:
 
 
 def main() -> None:
-    with ProcessPoolExecutor(2) as pool:
-        table = pd.DataFrame(list(pool.map(one_seed, SEEDS)))
+    table = pd.DataFrame(map_parallel(one_seed, [(seed,) for seed in SEEDS]))
     table.to_csv(HERE / "results.csv", index=False, float_format="%.6g")
     settings = table.drop(columns=["seed", "observations"])
     simulator = SimulationConfig()

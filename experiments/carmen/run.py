@@ -1,9 +1,10 @@
 """Corner FastSLAM on the 8 CARMEN building logs: import, map, score against the reference poses.
 
-    python experiments/carmen/run.py [--seeds 5] [--workers 2] [--logs aces ...]   (about 15 minutes on 2 cores)
+    python -m experiments.carmen.run [--seeds 5] [--workers 2] [--logs aces ...]   (about 15 minutes on 2 cores)
 
-For each log: ``mazeslam import carmen`` then FastSLAM with configs/carmen.toml (one setting for
-the family: laser odometry, FastSLAM 2.0, 100 particles) under ``--seeds`` filter seeds. Scored at
+For each log: ``mazeslam import carmen`` then corner FastSLAM with configs/carmen.toml's ``[fastslam]``
+and ``[corners]`` (its ``[map] kind`` set to "landmarks"; one setting for the family: laser odometry,
+FastSLAM 2.0, 100 particles) under ``--seeds`` filter seeds. Scored at
 the scans against the reference poses (gmapping's corrected poses: a reference, not ground truth;
 the log has no other pose to score against): the ATE of the wheel odometry, of the laser odometry
 alone and of FastSLAM (median and worst over the seeds), with and without SE(2) alignment; the
@@ -19,9 +20,7 @@ picture of the map that comes with the log.
 from __future__ import annotations
 
 import argparse
-import dataclasses
 import time
-from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 
 import matplotlib
@@ -31,15 +30,18 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 import pandas as pd  # noqa: E402
 
-from mazeslam.evaluation import slam_report  # noqa: E402
+from mazeslam.core.config import with_settings  # noqa: E402
+from mazeslam.core.motion import dead_reckoning  # noqa: E402
+from mazeslam.data.carmen import import_carmen  # noqa: E402
+from mazeslam.data.loaded_run import LoadedRun, load_run  # noqa: E402
+from mazeslam.data.scans import scan_points_world  # noqa: E402
 from mazeslam.evaluation.consistency import nees_summary, nis_summary  # noqa: E402
 from mazeslam.evaluation.metrics import absolute_trajectory_error, normalized_estimation_error  # noqa: E402
 from mazeslam.evaluation.relations import BUILDING_RADIUS, relation_metric, spatial_relations  # noqa: E402
-from mazeslam.filters.motion import dead_reckoning  # noqa: E402
-from mazeslam.filters.scan_matching import LaserOdometry, laser_odometry  # noqa: E402
-from mazeslam.imports.carmen import import_carmen  # noqa: E402
-from mazeslam.loaded_run import LoadedRun, load_run  # noqa: E402
-from mazeslam.slam import SlamConfig, load_slam_config, slam_on_run  # noqa: E402
+from mazeslam.pipeline import SlamConfig, load_slam_config, run_slam  # noqa: E402
+from mazeslam.registration.scan_matching import LaserOdometry, laser_odometry  # noqa: E402
+from mazeslam.sweeps.pool import map_parallel  # noqa: E402
+from mazeslam.viz import slam_figure as slam_report  # noqa: E402
 
 HERE = Path(__file__).resolve().parent
 PROJECT = HERE.parents[1]
@@ -62,9 +64,8 @@ def run_one(
 ) -> dict:
     """FastSLAM on one imported log with one filter seed, moving by the log's laser odometry
     ``laser``: its errors at the scans (``reference`` poses at the ``scans`` records), and the result."""
-    config = dataclasses.replace(config, fastslam=dataclasses.replace(config.fastslam, seed=seed))
     began = time.perf_counter()
-    result = slam_on_run(run, config, progress=False, laser=laser)
+    result = run_slam(run, config.with_seed(seed), progress=False, laser=laser)
     seconds = time.perf_counter() - began
     raw, aligned = ate(result.mean_poses[scans], reference[scans])
     relations = relation_metric(
@@ -96,7 +97,7 @@ def evaluate(name: str, seeds: int, out: Path) -> tuple[dict, list[dict]]:
     within ``BUILDING_RADIUS`` of each other by the reference, for results/seeds.csv)."""
     course = out / f"{name}.log"
     import_carmen(DATA / f"{name}-corrected.log.gz", course)
-    config = load_slam_config(CONFIG)
+    config = with_settings(load_slam_config(CONFIG), {"map.kind": "landmarks"})  # corner FastSLAM, not the grid
     run = load_run(course)
     course_log, reference, start = run.log, run.truth, run.start_pose
     scans = np.flatnonzero(course_log.is_scan)
@@ -118,9 +119,7 @@ def evaluate(name: str, seeds: int, out: Path) -> tuple[dict, list[dict]]:
     row["NIS mean (median)"] = float(np.median([run["nis_mean"] for run in runs]))
     row["landmarks"] = median["landmarks"]
     row["FastSLAM s"] = matching_seconds + float(np.median([run["seconds"] for run in runs]))
-    points = slam_report.scan_points_world(
-        course_log, median["result"].mean_poses, run.geometry, 0.1, config.corners.max_range
-    )
+    points = scan_points_world(course_log, median["result"].mean_poses, run.geometry, 0.1, config.corners.max_range)
     title = f"{name}: FastSLAM on laser odometry (filter seed {median['seed']}, the median of {seeds})"
     slam_report.plot_slam(
         FIGURES / f"{name}.png",
@@ -173,8 +172,7 @@ def main():
     out = HERE / "results"
     out.mkdir(exist_ok=True)
     FIGURES.mkdir(parents=True, exist_ok=True)
-    with ProcessPoolExecutor(args.workers) as pool:
-        results = list(pool.map(evaluate, args.logs, [args.seeds] * len(args.logs), [out] * len(args.logs)))
+    results = map_parallel(evaluate, [(name, args.seeds, out) for name in args.logs], args.workers)
     seeds = merged(out / "seeds.csv", pd.DataFrame([row for _, rows in results for row in rows]), ["log", "seed"])
     seeds.to_csv(out / "seeds.csv", index=False, float_format="%.4g")
     table = merged(out / "table.csv", pd.DataFrame([row for row, _ in results]), ["log"])

@@ -1,19 +1,19 @@
-"""orebro (no odometry) with other settings for blind logs than configs/carmen.toml's: why its
+"""orebro (no odometry) with other settings than configs/carmen_without_odometry.toml's: why its
 settings are kept. Each variant changes one thing:
 
 - "own fitted noise": orebro's own laser-odometry noise fit (``results/motion_noise.csv``, its row)
-  as ``[grid] blind_motion_noise``;
+  as ``[grid] motion_noise``;
 - "floor 0.05": ``motion_floor`` 0.05 m and rad, the floor before the noise was measured;
 - "search window +-1.5 m": the search reaches 3.75 of its standard deviations, not 2.5
   (``rescue.window_sigmas``): +-1.5 m instead of +-1 m, and +-2.6 rad instead of +-1.75 rad, at
-  every scan (the failed-match search, which shares the setting, does not run on a log without
-  odometry); its prior is unchanged;
+  every scan (the failed-match search, which shares the setting, does not run when the search runs
+  at every scan); its prior is unchanged;
 - "search prior 1 m": ``every_scan_sigma`` (1.0 m, 0.7 rad): the window reaches 2.5 m and its
   refinements are chosen under that wider prior.
 
 The default's rows for the same seeds are run.py's (``results/table.csv``).
 
-    python experiments/carmen_grid/blind_trials.py [--variants "floor 0.05" ...] [--seeds 0 1] [--jobs 2]
+    python -m experiments.carmen_grid.blind_trials [--variants "floor 0.05" ...] [--seeds 0 1] [--jobs 2]
 
 Writes ``results/blind_trials.csv`` (keeping the rows of other variants and seeds): per variant and
 seed the aligned ATE of the best path against the reference poses, the mean path's pose NEES median
@@ -28,14 +28,13 @@ import dataclasses
 
 import numpy as np
 import pandas as pd
-from run import CONFIG, RESULTS, imported_run, run_jobs  # this folder's run.py
 
+from experiments.carmen_grid.run import RESULTS, imported_run, run_jobs, slam_config
+from mazeslam.core.motion import OdometryNoise
 from mazeslam.evaluation.consistency import nees_summary
 from mazeslam.evaluation.metrics import absolute_trajectory_error, normalized_estimation_error
-from mazeslam.filters.motion import OdometryNoise
-from mazeslam.grid.filter import GridSlamParams
-from mazeslam.grid_command import grid_on_run
-from mazeslam.slam import load_slam_config
+from mazeslam.gridslam.filter import GridSlamParams
+from mazeslam.pipeline import run_slam
 
 LOG = "orebro"
 VARIANTS = ("own fitted noise", "floor 0.05", "search window +-1.5 m", "search prior 1 m")
@@ -48,9 +47,9 @@ def orebro_fit() -> OdometryNoise:
 
 
 def variant_params(grid: GridSlamParams, variant: str) -> GridSlamParams:
-    """configs/carmen.toml's grid settings ``grid`` with ``variant``'s one change."""
+    """configs/carmen_without_odometry.toml's grid settings ``grid`` with ``variant``'s one change."""
     if variant == "own fitted noise":
-        return dataclasses.replace(grid, blind_motion_noise=orebro_fit())
+        return dataclasses.replace(grid, motion_noise=orebro_fit())
     if variant == "floor 0.05":
         return dataclasses.replace(grid, motion_floor=0.05)
     if variant == "search window +-1.5 m":
@@ -60,22 +59,21 @@ def variant_params(grid: GridSlamParams, variant: str) -> GridSlamParams:
     raise ValueError(f"unknown variant {variant!r}")
 
 
-def trial_row(job: tuple[str, int]) -> dict:
+def trial_row(variant: str, seed: int) -> dict:
     """One filter seed on orebro with one variant."""
-    variant, seed = job
     run = imported_run(LOG)
-    config = load_slam_config(CONFIG)
-    grid = variant_params(dataclasses.replace(config.grid, seed=seed), variant)
-    result = grid_on_run(run, dataclasses.replace(config, grid=grid))
-    reference = run.truth[result.scan_records]
-    nees = normalized_estimation_error(result.mean_poses, result.covariances, reference)
+    config = slam_config(run).with_seed(seed)
+    result = run_slam(run, dataclasses.replace(config, grid=variant_params(config.grid, variant)), progress=False)
+    scans = result.grid_run  # the grid filter's own record, per scan
+    reference = run.truth[scans.scan_records]
+    nees = normalized_estimation_error(scans.mean_poses, scans.covariances, reference)
     return {
         "log": LOG,
         "variant": variant,
         "seed": seed,
-        "ate_rmse_m": absolute_trajectory_error(result.best_poses, reference, align=True)["rmse"],
+        "ate_rmse_m": absolute_trajectory_error(scans.best_poses, reference, align=True)["rmse"],
         "nees_median": nees_summary(nees)["median"],
-        "nis_median": float(np.nanmedian(result.nis)),
+        "nis_median": float(np.median(result.nis)),
     }
 
 

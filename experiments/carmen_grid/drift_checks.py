@@ -20,27 +20,23 @@ its path length over the reference's, and the median over the accepted intervals
 log, the laser's maximum range and the share of its beams with no return within it (the importer
 writes them as 0; the grid filter clears the map along them up to that range).
 
-Run: ``python experiments/carmen_grid/drift_checks.py`` after run.py (a few CPU minutes: the
+Run: ``python -m experiments.carmen_grid.drift_checks`` after run.py (a few CPU minutes: the
 laser odometry of every log); writes ``results/drift_checks.md``.
 """
 
 from __future__ import annotations
 
 import itertools
-from pathlib import Path
 
 import numpy as np
 import pandas as pd
-from run import imported_run  # this folder's run.py
 
+from experiments.carmen_grid.run import CONFIG, RESULTS, imported_run
+from mazeslam.core.geometry import relative, wrap_angle
 from mazeslam.evaluation.metrics import align_se2, apply_se2
-from mazeslam.filters.scan_matching import laser_odometry
-from mazeslam.geometry import relative, wrap_angle
-from mazeslam.slam import load_slam_config
+from mazeslam.pipeline import load_slam_config
+from mazeslam.registration.scan_matching import laser_odometry
 
-HERE = Path(__file__).resolve().parent
-RESULTS = HERE / "results"
-CONFIG = HERE.parents[1] / "configs" / "carmen.toml"
 #: A step between consecutive scans this far off the reference's (m, rad) is wrong; up to
 #: ``LISTED`` wrong steps of a run are listed.
 WRONG_STEP, LISTED = (0.3, 0.1), 15

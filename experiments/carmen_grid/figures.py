@@ -1,7 +1,7 @@
 """Each log's grid map (results/<log>_seed0/occupancy.png with its .yaml) beside the log's own
 picture (shared/data/carmen/<log>-corrected.png): results/<log>_compare.png.
 
-Run after run.py: ``python experiments/carmen_grid/figures.py``. Ours is drawn in the filter's frame
+Run after run.py: ``python -m experiments.carmen_grid.figures``. Ours is drawn in the filter's frame
 (metres, from the map's resolution and origin), so rotated by the start heading; the log's picture
 is in its own pixels (it comes without a scale).
 """
@@ -15,7 +15,8 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 import yaml  # noqa: E402
 from matplotlib.patches import Patch  # noqa: E402
-from run import CARMEN, LOGS, RESULTS  # noqa: E402
+
+from experiments.carmen_grid.run import CARMEN, LOGS, RESULTS  # noqa: E402
 
 PIXELS = 600  # the longer side of each panel's image: larger maps are shrunk to it
 

@@ -2,14 +2,14 @@
 the grid filter's default motion noise (``GridSlamParams.motion_noise``) comes from.
 
 Per log: the laser odometry with configs/carmen.toml's ``[scan_matching]``, as the grid filter moves
-by it, fitted interval by interval to the motion model (``mazeslam.evaluation.odometry_noise``, the
+by it, fitted interval by interval to the motion model (``mazeslam.calibration.odometry_noise``, the
 numbers ``mazeslam odometry-noise LOG --config configs/carmen.toml`` prints), and the median over
 the logs. orebro has no odometry and its intervals are matched blind: its fit is the largest.
 Beside it the trimmed fit (``fit_noise_trimmed``, ``--trimmed``): the same without the intervals
 whose error lies beyond 3 standard deviations of the fit, at least the matcher's ``prior_floor``
 (0.01 m and rad), and how many those are.
 
-    python experiments/carmen_grid/motion_noise.py
+    python -m experiments.carmen_grid.motion_noise
 
 Writes ``results/motion_noise.csv`` and ``results/motion_noise.md``.
 """
@@ -17,11 +17,11 @@ Writes ``results/motion_noise.csv`` and ``results/motion_noise.md``.
 from __future__ import annotations
 
 import pandas as pd
-from run import CONFIG, LOGS, RESULTS, imported_run  # this folder's run.py
 
-from mazeslam.evaluation.odometry_noise import fit_noise, fit_noise_trimmed, motion_stretch_errors
-from mazeslam.filters.scan_matching import laser_odometry
-from mazeslam.slam import load_slam_config
+from experiments.carmen_grid.run import CONFIG, LOGS, RESULTS, imported_run
+from mazeslam.calibration.odometry_noise import fit_noise, fit_noise_trimmed, motion_stretch_errors
+from mazeslam.pipeline import load_slam_config
+from mazeslam.registration.scan_matching import laser_odometry
 
 
 def fit_row(name: str) -> dict:
@@ -53,7 +53,7 @@ def main() -> None:
     text = (
         "The laser odometry's noise on the CARMEN logs (configs/carmen.toml's [scan_matching]) fitted "
         "against the reference poses, interval by interval: sigmaX m/sqrt(m), sigmaTH rad/sqrt(rad), "
-        "sigmaTH_drive rad/sqrt(m) (mazeslam.evaluation.odometry_noise); the median row gives the grid "
+        "sigmaTH_drive rad/sqrt(m) (mazeslam.calibration.odometry_noise); the median row gives the grid "
         "filter's default motion noise. trimmed_*: the fit without the intervals beyond 3 standard deviations "
         "of it, at least the matcher's prior_floor (left_out of them, the failed matches; fit_noise_trimmed); "
         "their median row gives corner FastSLAM's noise in configs/carmen.toml.\n\n"

@@ -27,28 +27,25 @@ misses metres along corridors: docs/grid.md, "Known limits").
    of the reference with the laser odometry's pose taken at the scans where the past fits it as
    well as the reference's (within ``TIE``) or better.
 
-Run: ``python experiments/carmen_grid/orebro_checks.py`` (about 10 CPU minutes); writes
+Run: ``python -m experiments.carmen_grid.orebro_checks`` (about 10 CPU minutes); writes
 ``results/orebro_checks.md``.
 """
 
 from __future__ import annotations
 
-from pathlib import Path
-
 import numpy as np
 import pandas as pd
-from run import imported_run  # this folder's run.py
 
+from experiments.carmen_grid.run import RESULTS, imported_run
+from mazeslam.core.geometry import compose, relative, transform_points, wrap_angle
+from mazeslam.data.loaded_run import LoadedRun
 from mazeslam.evaluation.metrics import absolute_trajectory_error
-from mazeslam.filters.correlative import CorrelativeParams, LikelihoodGrid, correlative_candidates
-from mazeslam.filters.scan_matching import ReferenceScan, ScanMatchParams, laser_odometry, match_scan, scan_points
-from mazeslam.geometry import compose, relative, transform_points, wrap_angle
-from mazeslam.grid.filter import ScanSensor
-from mazeslam.grid.matching import LikelihoodField, MatchParams, match_points, refine_pose
-from mazeslam.grid.occupancy import GridParams, TiledGrid, integrate_scan, scan_rays
-from mazeslam.loaded_run import LoadedRun
+from mazeslam.gridslam.filter import ScanSensor
+from mazeslam.gridslam.matching import LikelihoodField, MatchParams, match_points, refine_pose
+from mazeslam.gridslam.occupancy import GridParams, TiledGrid, integrate_scan, scan_rays
+from mazeslam.registration.correlative import CorrelativeParams, LikelihoodGrid, correlative_candidates
+from mazeslam.registration.scan_matching import ReferenceScan, ScanMatchParams, laser_odometry, match_scan, scan_points
 
-RESULTS = Path(__file__).resolve().parent / "results"
 #: The prior of the wide search around the laser odometry's prediction: sigma (m, m, rad).
 SEARCH_SIGMA = np.array([1.0, 1.0, 0.3])
 #: A scan's best pose is wrong when this far from the reference (m, rad).

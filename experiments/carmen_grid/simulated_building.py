@@ -1,15 +1,15 @@
 """The grid filter's consistency where the truth is known: the simulated building of
-``mazeslam.grid.synthetic`` (a ring of 2 m corridors round a 16 x 10 m block, driven 1.3 times with
+``mazeslam.sim.building`` (a ring of 2 m corridors round a 16 x 10 m block, driven 1.3 times with
 odometry that bends 0.02 rad per metre), one log per seed, run with configs/carmen.toml's ``[grid]``
 settings (30 particles, its motion noise and thresholds), filter seed 0.
 
 Per log: aligned ATE of the best particle's and of the weighted-mean path at the scans against the
 true poses, dead reckoning's beside them; the mean path's pose NEES against the truth with the
 covariance the filter states (3 degrees of freedom: consistent is a median near 2.4, a mean near 3,
-95 % inside 7.81); the motion NIS over the processed scans (``mazeslam.grid.filter.motion_nis``:
+95 % inside 7.81); the motion NIS over the processed scans (``mazeslam.gridslam.filter.motion_nis``:
 the scan match's correction of the motion against the motion noise, consistent near 3); CPU seconds.
 
-    python experiments/carmen_grid/simulated_building.py [--seeds 0 1 2 3 4] [--out results/simulated_building.csv]
+    python -m experiments.carmen_grid.simulated_building [--seeds 0 1 2 3 4] [--out FILE.csv]
 
 Writes the CSV and, beside it, a Markdown table of the same name (quoted by docs/grid.md).
 ``--motion-noise`` replaces the config's ``[grid] motion_noise`` (``results/simulated_building_trimmed_noise.csv``:
@@ -30,14 +30,14 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from mazeslam.core.motion import OdometryNoise, dead_reckoning
+from mazeslam.data.log import read
 from mazeslam.evaluation.consistency import nees_summary
 from mazeslam.evaluation.metrics import absolute_trajectory_error, normalized_estimation_error
-from mazeslam.filters.motion import OdometryNoise, dead_reckoning
-from mazeslam.grid import run_grid_slam
-from mazeslam.grid.synthetic import simulate_building_log
-from mazeslam.grid_command import grid_params
-from mazeslam.log import read
-from mazeslam.slam import load_slam_config
+from mazeslam.gridslam import run_grid_slam
+from mazeslam.pipeline import load_slam_config
+from mazeslam.pipeline.grid_run import grid_params
+from mazeslam.sim.building import simulate_building_log
 
 HERE = Path(__file__).resolve().parent
 CONFIG = HERE.parents[1] / "configs" / "carmen.toml"

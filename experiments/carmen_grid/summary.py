@@ -6,7 +6,7 @@ both scored alike (quoted by docs/grid.md and docs/carmen.md). With ``results/ta
 table of the code before this round's change, ``BEFORE_CODE``), ``results/before_after.md``: the
 aligned ATE of the same (log, seed) runs before and after (``CHANGE``).
 
-    python experiments/carmen_grid/summary.py
+    python -m experiments.carmen_grid.summary
 """
 
 from __future__ import annotations
@@ -24,7 +24,7 @@ CHANGE = (
     "sessions 9-10: each particle's first motion is drawn with noise, and the motion noise is the laser odometry's "
     "measured against the references (0.04, 0.02, 0.008, floor 0.01; 0.1, 0.1, 0.05, floor 0.01 on orebro, "
     "which has no odometry) where it was 0.1, 0.1, 0.05 with a 0.05 floor; and the import moves the reference's "
-    "poses before the first scan into the scans' frame (mazeslam.imports.carmen.anchored_to_first_scan), which "
+    "poses before the first scan into the scans' frame (mazeslam.data.carmen.anchored_to_first_scan), which "
     "turns the whole run by that offset (aligned ATE does not see it; a run's random draws then differ)"
 )
 TARGET = 0.3  # m: issue 17's bound on the worst seed's aligned ATE

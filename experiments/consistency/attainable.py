@@ -1,6 +1,6 @@
 """Is "ATE at most a third of dead reckoning's" attainable on every seed? The batch optimum answers.
 
-    python experiments/consistency/attainable.py          # seeds 11-40
+    python -m experiments.consistency.attainable          # seeds 11-40
 
 Per seed of the simulated default maze: dead reckoning's ATE RMSE (as estimated, at every record
 the filter is scored at), the default FastSLAM's (100 particles) and the batch least-squares
@@ -14,16 +14,16 @@ Writes ``attainable.csv`` and ``attainable.md`` beside this script.
 from __future__ import annotations
 
 import tempfile
-from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 
 import pandas as pd
 
 from mazeslam import simulate
+from mazeslam.data.loaded_run import load_run
 from mazeslam.evaluation.scoring import DEAD_RECKONING, score_run
-from mazeslam.loaded_run import load_run
-from mazeslam.slam import SlamConfig, slam_on_run
-from mazeslam.smooth_command import optimum_columns
+from mazeslam.pipeline import SlamConfig, run_slam
+from mazeslam.smoothing.optimum import optimum_columns
+from mazeslam.sweeps.pool import map_parallel
 
 HERE = Path(__file__).resolve().parent
 SEEDS = list(range(11, 41))
@@ -33,7 +33,7 @@ def one_seed(seed: int) -> dict:
     with tempfile.TemporaryDirectory() as folder:
         run = load_run(simulate(Path(folder) / "run.log", seed=seed, progress=False).log_path)
     config = SlamConfig()
-    score = score_run(run, slam_on_run(run, config, progress=False))
+    score = score_run(run, run_slam(run, config, progress=False))
     optimum = optimum_columns(run, config, score)
     assert optimum is not None  # a simulated log has its truth and corners
     reckoning = score.ate(DEAD_RECKONING)
@@ -48,15 +48,14 @@ def one_seed(seed: int) -> dict:
 
 
 def main() -> None:
-    with ProcessPoolExecutor(2) as pool:
-        table = pd.DataFrame(list(pool.map(one_seed, SEEDS)))
+    table = pd.DataFrame(map_parallel(one_seed, [(seed,) for seed in SEEDS]))
     table.to_csv(HERE / "attainable.csv", index=False, float_format="%.6g")
     unattainable = table.loc[table["optimum_over_reckoning"] > 1 / 3, "seed"].tolist()
     text = (
         f"Simulated default mazes, seeds {SEEDS[0]}-{SEEDS[-1]}: ATE RMSE as estimated (mm) of dead reckoning, "
         "the default FastSLAM (100 particles) and the batch optimum with the true association, and each "
         f"ratio to dead reckoning's. Seeds where even the optimum is above a third: {unattainable or 'none'}. "
-        "`python experiments/consistency/attainable.py`.\n\n" + table.to_markdown(index=False, floatfmt=".3g") + "\n"
+        "`python -m experiments.consistency.attainable`.\n\n" + table.to_markdown(index=False, floatfmt=".3g") + "\n"
     )
     (HERE / "attainable.md").write_text(text)
     print(text)

@@ -1,6 +1,6 @@
 """Where FastSLAM's stated uncertainty departs from its error, on simulated default mazes.
 
-    python experiments/consistency/diagnosis.py            # seeds 11-20
+    python -m experiments.consistency.diagnosis            # seeds 11-20
 
 For each seed and setting: NIS per observation kind (is each part of the observation model
 right?), pose NEES split into position (2 dof, consistent median 1.39) and heading (1 dof,
@@ -16,19 +16,19 @@ import argparse
 import dataclasses
 import math
 import tempfile
-from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 
 import numpy as np
 import pandas as pd
 
 from mazeslam import simulate
+from mazeslam.core.geometry import wrap_angle
+from mazeslam.data.loaded_run import load_run
 from mazeslam.evaluation.consistency import map_orientation_spread
 from mazeslam.evaluation.metrics import normalized_estimation_error
-from mazeslam.filters.fastslam import FastSLAMParams
-from mazeslam.geometry import wrap_angle
-from mazeslam.loaded_run import load_run
-from mazeslam.slam import SlamConfig, slam_on_run
+from mazeslam.fastslam.filter import FastSLAMParams
+from mazeslam.pipeline import SlamConfig, run_slam
+from mazeslam.sweeps.pool import map_parallel
 
 HERE = Path(__file__).resolve().parent
 #: (particles, likelihood_exponent): the default, the default without the consistency margin, 1000 particles.
@@ -61,7 +61,7 @@ def one_seed(seed: int) -> list[dict]:
                 config.fastslam, NPARTICLES=particles, likelihood_exponent=exponent, seed=seed
             ),
         )
-        result = slam_on_run(run, config, progress=False)
+        result = run_slam(run, config, progress=False)
         errors = result.mean_poses - run.truth
         errors[:, 2] = wrap_angle(errors[:, 2])
         moved = slice(1, None)  # the first record: the start pose, known exactly
@@ -114,7 +114,7 @@ def summary(table: pd.DataFrame) -> str:
         "run's records (consistent: 3 for the pose, 1.39 for the position, 0.45 for the heading), worst "
         "over seeds. Map orientation spread: how far the particles' final maps are turned against each "
         "other (`map_orientation_spread`), beside how far the estimate's heading is off at the end. "
-        "`python experiments/consistency/diagnosis.py`.\n\n" + shown.to_markdown(floatfmt=".3g") + "\n"
+        "`python -m experiments.consistency.diagnosis`.\n\n" + shown.to_markdown(floatfmt=".3g") + "\n"
     )
 
 
@@ -124,8 +124,8 @@ def main() -> None:
     parser.add_argument("--workers", type=int, default=2)
     parser.add_argument("--out", type=Path, default=HERE)
     arguments = parser.parse_args()
-    with ProcessPoolExecutor(arguments.workers) as pool:
-        table = pd.DataFrame([row for rows in pool.map(one_seed, arguments.seeds) for row in rows])
+    calls = [(seed,) for seed in arguments.seeds]
+    table = pd.DataFrame([row for rows in map_parallel(one_seed, calls, arguments.workers) for row in rows])
     arguments.out.mkdir(parents=True, exist_ok=True)
     table.to_csv(arguments.out / "diagnosis.csv", index=False, float_format="%.6g")
     text = summary(table)

@@ -1,6 +1,6 @@
 """How the filter's consistency margin (``[fastslam] likelihood_exponent``) is chosen.
 
-    python experiments/consistency/margin.py
+    python -m experiments.consistency.margin
 
 Simulated default mazes, FastSLAM 2.0, default settings but the exponent, tried from the largest
 (the least margin) down: 1, 0.5, 0.35, 0.25, 0.15, 0.1. The exponent chosen is the first that keeps
@@ -13,17 +13,15 @@ The trajectory error is shown but plays no part. Writes ``margin.csv`` and ``mar
 
 from __future__ import annotations
 
-import sys
-from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 
 import pandas as pd
 
+from experiments.consistency.run import one_log  # this folder's runner: simulate, filter, score one seed
 from mazeslam.evaluation.consistency import POSE_BOUND_95, choose_margin
+from mazeslam.sweeps.pool import map_parallel
 
 HERE = Path(__file__).resolve().parent
-sys.path.insert(0, str(HERE))
-from run import one_log  # noqa: E402  (this folder's runner: simulate, filter, score one seed)
 
 EXPONENTS = [1.0, 0.5, 0.35, 0.25, 0.15, 0.1]
 #: (particles, the bar the worst seed's median pose NEES must stay under), checked in order
@@ -39,15 +37,8 @@ def runs(exponents: list[float], particles: int) -> pd.DataFrame:
 
 def runs_of(exponent: float, particles: int, seeds: list[int]) -> pd.DataFrame:
     """``one_log`` over ``seeds`` with ``likelihood_exponent`` set, one row per seed."""
-    with ProcessPoolExecutor(2) as pool:
-        rows = pool.map(
-            one_log,
-            seeds,
-            [[particles]] * len(seeds),
-            [[2]] * len(seeds),
-            [{"likelihood_exponent": exponent}] * len(seeds),
-        )
-        return pd.DataFrame([{"likelihood_exponent": exponent, **row} for seed_rows in rows for row in seed_rows])
+    rows = map_parallel(one_log, [(seed, [particles], [2], {"likelihood_exponent": exponent}) for seed in seeds])
+    return pd.DataFrame([{"likelihood_exponent": exponent, **row} for seed_rows in rows for row in seed_rows])
 
 
 def summary(table: pd.DataFrame) -> pd.DataFrame:
@@ -75,7 +66,7 @@ def main() -> None:
         "`likelihood_exponent`, tried from the largest down. Chosen: the first whose worst seed's median "
         f"pose NEES is under 10 at 100 particles (seeds 11-30; half the bar of 20 the filter is held to "
         f"there) and under {POSE_BOUND_95:.2f} at 1000 particles (seeds 11-20): **{chosen}**. A consistent "
-        "filter's median NEES is about 2.4. `python experiments/consistency/margin.py`.\n\n"
+        "filter's median NEES is about 2.4. `python -m experiments.consistency.margin`.\n\n"
         + summary(table).to_markdown(floatfmt=".3g")
         + "\n"
     )

@@ -1,8 +1,8 @@
 """Consistency of FastSLAM on simulated default mazes: ATE, pose NEES, NIS and resampling over
-seeds, particle counts and both versions (issue 15's checks).
+seeds, particle counts and both versions.
 
-    python experiments/consistency/run.py                   # seeds 11-20, 10/100/1000 particles, 1.0 and 2.0
-    python experiments/consistency/run.py --seeds 31 32 --particles 100 --versions 2
+    python -m experiments.consistency.run                   # seeds 11-20, 10/100/1000 particles, 1.0 and 2.0
+    python -m experiments.consistency.run --seeds 31 32 --particles 100 --versions 2
 
 Writes ``results.csv`` (one row per run) and ``summary.md`` (per setting: medians and worst seeds)
 beside this script, and ``nees_over_time.png`` (NEES along one run per version).
@@ -13,16 +13,16 @@ from __future__ import annotations
 import argparse
 import dataclasses
 import tempfile
-from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 
 import pandas as pd
 
 from mazeslam import simulate
+from mazeslam.data.loaded_run import load_run
 from mazeslam.evaluation.consistency import POSE_BOUND_95, nis_summary
-from mazeslam.evaluation.scoring import DEAD_RECKONING, FILTER_MEAN, score_run
-from mazeslam.loaded_run import load_run
-from mazeslam.slam import SlamConfig, slam_on_run
+from mazeslam.evaluation.scoring import DEAD_RECKONING, score_run
+from mazeslam.pipeline import SlamConfig, run_slam
+from mazeslam.sweeps.pool import map_parallel
 
 HERE = Path(__file__).resolve().parent
 
@@ -40,7 +40,7 @@ def one_log(seed: int, particles: list[int], versions: list[int], changes: dict)
                 config,
                 fastslam=dataclasses.replace(config.fastslam, NPARTICLES=count, version=version, seed=seed, **changes),
             )
-            result = slam_on_run(run, config, progress=False)
+            result = run_slam(run, config, progress=False)
             score = score_run(run, result)
             nis = nis_summary(result.nis)
             rows.append(
@@ -52,7 +52,7 @@ def one_log(seed: int, particles: list[int], versions: list[int], changes: dict)
                     "reckoning_ate_m": score.ate(DEAD_RECKONING),
                     "ate_ratio": score.ate() / score.ate(DEAD_RECKONING),
                     "aligned_ate_m": score.ate(aligned=True),
-                    "median_nees": score.table.loc[FILTER_MEAN, "median_nees"],
+                    "median_nees": score.table.loc[score.mean_row, "median_nees"],
                     "nees_inside_95": score.nees_summary["inside_95"],
                     "nis_mean": nis["mean"],
                     "resampled_fraction": result.resampled_fraction,
@@ -123,11 +123,8 @@ def main() -> None:
     )
     arguments = parser.parse_args()
     changes = {name: float(value) for name, value in (item.split("=") for item in arguments.set)}
-    with ProcessPoolExecutor(arguments.workers) as pool:
-        futures = [
-            pool.submit(one_log, seed, arguments.particles, arguments.versions, changes) for seed in arguments.seeds
-        ]
-        table = pd.DataFrame([row for future in futures for row in future.result()])
+    calls = [(seed, arguments.particles, arguments.versions, changes) for seed in arguments.seeds]
+    table = pd.DataFrame([row for rows in map_parallel(one_log, calls, arguments.workers) for row in rows])
     arguments.out.mkdir(parents=True, exist_ok=True)
     table.drop(columns="nees").to_csv(arguments.out / "results.csv", index=False, float_format="%.6g")
     text = summary(table)

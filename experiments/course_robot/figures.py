@@ -4,7 +4,7 @@ corner FastSLAM and the grid filter (configs/course.toml, filter seed 0).
 Each panel places the scans' 0.05-0.4 m returns along one path (as map sharpness counts them) and
 draws the path; a simulated log adds the true walls and path.
 
-    .venv/bin/python experiments/course_robot/figures.py    # about 1 min
+    python -m experiments.course_robot.figures    # about 1 min
 
 Writes docs/img/course_log1_maps.png and docs/img/course_sim_maps.png.
 """
@@ -19,14 +19,14 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
-from mazeslam.beam_detection import with_detected_convention  # noqa: E402
-from mazeslam.envs.simulator import load_config, simulate  # noqa: E402
+from mazeslam.core.config import with_settings  # noqa: E402
+from mazeslam.data.beam_detection import with_detected_convention  # noqa: E402
+from mazeslam.data.loaded_run import LoadedRun, load_run  # noqa: E402
+from mazeslam.data.scans import scan_points_world  # noqa: E402
 from mazeslam.evaluation.metrics import absolute_trajectory_error  # noqa: E402
 from mazeslam.evaluation.sharpness import TRUSTED_SPAN, dead_reckoning_without_glitches, paths_sharpness  # noqa: E402
-from mazeslam.evaluation.slam_report import scan_points_world  # noqa: E402
-from mazeslam.grid_command import grid_on_run  # noqa: E402
-from mazeslam.loaded_run import LoadedRun, load_run  # noqa: E402
-from mazeslam.slam import SlamConfig, load_slam_config, slam_on_run  # noqa: E402
+from mazeslam.pipeline import MapKind, SlamConfig, load_slam_config, run_slam  # noqa: E402
+from mazeslam.sim.simulator import load_config, simulate  # noqa: E402
 
 HERE = Path(__file__).resolve().parent
 PROJECT = HERE.parents[1]
@@ -41,11 +41,11 @@ SIMULATION_SEED = 201
 def paths_of(run: LoadedRun, config: SlamConfig) -> dict:
     """Name -> (R, 3) path: dead reckoning (glitches left out), corner FastSLAM's and the grid filter's mean."""
     reckoned = dead_reckoning_without_glitches(run, config.odometry.jump_tolerance)
-    grid = grid_on_run(run, config)
+    corners, grid = (with_settings(config, {"map.kind": kind}) for kind in (MapKind.LANDMARKS, MapKind.GRID))
     return {
         "dead reckoning": reckoned,
-        "corner FastSLAM (mean)": slam_on_run(run, config, progress=False).mean_poses,
-        "grid filter (mean)": grid.record_trajectory(which="mean")[0],
+        "corner FastSLAM (mean)": run_slam(run, corners, progress=False).mean_poses,
+        "grid filter (mean)": run_slam(run, grid, progress=False).mean_poses,
     }
 
 

@@ -1,14 +1,14 @@
-"""Issue 16: the course robot's filters compared - dead reckoning, corner FastSLAM and the grid filter.
+"""The course robot's filters compared - dead reckoning, corner FastSLAM and the grid filter.
 
 On log1 (no truth): map sharpness (occupied 1 cm cells of the 0.05-0.4 m returns placed along the
 path, over dead reckoning's) and path extent (bounding-box diagonal, over dead reckoning's) for
 filter seeds 0-4. On simulated course-robot logs (configs/simulation_course_robot.toml, seeds
 201-205, not used for choosing any setting): ATE, pose NEES and the same sharpness, with the true
 path's extent beside the estimates' (dead reckoning's path grows as it drifts, so an extent under
-1 is not by itself a shrunken estimate). Both filters with configs/course.toml: the grid filter as
-``[map] kind = "grid"`` runs it, corner FastSLAM with its ``[fastslam]`` and ``[corners]``.
+1 is not by itself a shrunken estimate). Both filters with configs/course.toml, its ``[map] kind``
+set to each: the grid filter with its ``[grid]``, corner FastSLAM with its ``[fastslam]`` and ``[corners]``.
 
-    .venv/bin/python experiments/course_robot/filters.py    # about 25 min on one core
+    python -m experiments.course_robot.filters    # about 25 min on one core
 
 Writes experiments/course_robot/filters.csv (a row per log, filter, seed and path) and filters.md
 (the per-log medians and worst values), adding rows to the CSV as they come.
@@ -16,22 +16,21 @@ Writes experiments/course_robot/filters.csv (a row per log, filter, seed and pat
 
 from __future__ import annotations
 
-import dataclasses
 import sys
 from pathlib import Path
 
 import numpy as np
 import pandas as pd
 
-from mazeslam.beam_detection import with_detected_convention
-from mazeslam.envs.simulator import load_config, simulate
+from mazeslam.core.config import with_settings
+from mazeslam.data.beam_detection import with_detected_convention
+from mazeslam.data.loaded_run import LoadedRun, load_run
 from mazeslam.evaluation.consistency import nees_summary
 from mazeslam.evaluation.metrics import absolute_trajectory_error, normalized_estimation_error
 from mazeslam.evaluation.sharpness import dead_reckoning_without_glitches, path_extent, paths_sharpness
-from mazeslam.grid.filter import odometry_at_record_times
-from mazeslam.grid_command import grid_on_run
-from mazeslam.loaded_run import LoadedRun, load_run
-from mazeslam.slam import MapKind, SlamConfig, load_slam_config, slam_on_run
+from mazeslam.gridslam.filter import odometry_at_record_times
+from mazeslam.pipeline import MapKind, SlamConfig, load_slam_config, run_slam
+from mazeslam.sim.simulator import load_config, simulate
 
 HERE = Path(__file__).resolve().parent
 PROJECT = HERE.parents[1]
@@ -50,17 +49,15 @@ def estimate(run: LoadedRun, config: SlamConfig, kind: MapKind, seed: int) -> tu
     """The mean path (R, 3) with its covariances (R, 3, 3) and the best particle's path (R, 3, no
     covariance) of one filter run over every record of ``run``; and its run-wide columns: how far
     the farthest particle of the final cloud is from its weighted mean, m (a split cloud: far), and
-    the grid filter's mean motion NIS (``mazeslam.grid.filter.motion_nis``; corner FastSLAM's NIS
+    the grid filter's mean motion NIS (``mazeslam.gridslam.filter.motion_nis``; corner FastSLAM's NIS
     is per observation, in the slam command's output)."""
+    result = run_slam(run, with_settings(config, {"map.kind": kind}).with_seed(seed), progress=False)
+    paths = {"mean": (result.mean_poses, result.pose_covariances), "best": (result.best_poses, None)}
     if kind == MapKind.GRID:
-        result = grid_on_run(run, dataclasses.replace(config, grid=dataclasses.replace(config.grid, seed=seed)))
-        paths = {"mean": result.record_trajectory(which="mean"), "best": (result.record_trajectory()[0], None)}
-        farthest = _farthest(result.particles.poses, result.particles.weights)
-        return paths, {"final_cloud_max_m": farthest, "motion_nis_mean": float(np.nanmean(result.nis))}
-    corners = dataclasses.replace(config, fastslam=dataclasses.replace(config.fastslam, seed=seed))
-    landmarks = slam_on_run(run, corners, progress=False)
-    paths = {"mean": (landmarks.mean_poses, landmarks.pose_covariances), "best": (landmarks.best_poses, None)}
-    return paths, {"final_cloud_max_m": _farthest(landmarks.filter.poses, landmarks.filter.weights())}
+        particles = result.grid_run.particles
+        farthest = _farthest(particles.poses, particles.weights)
+        return paths, {"final_cloud_max_m": farthest, "motion_nis_mean": float(np.mean(result.nis))}
+    return paths, {"final_cloud_max_m": _farthest(result.filter.poses, result.filter.weights())}
 
 
 def _farthest(poses: np.ndarray, weights: np.ndarray) -> float:

@@ -1,6 +1,6 @@
-"""The simulated course robot's scans beside the real robot's (log1), statistically (issue 16, item 1).
+"""The simulated course robot's scans beside the real robot's (log1), statistically.
 
-    python experiments/course_robot/sensor_comparison.py [--log1 ../shared/data/course/log1.txt]
+    python -m experiments.course_robot.sensor_comparison [--log1 ../shared/data/course/log1.txt]
 
 (about half a minute). Simulates configs/simulation_course_robot.toml with seeds 101-103 (seeds not
 meant for choosing filter settings) and measures, on them and on log1 (beam 0 forward, the sensor
@@ -30,12 +30,12 @@ import numpy as np
 import pandas as pd
 
 from mazeslam import simulate
-from mazeslam.beams import SensorOverrides
-from mazeslam.envs.simulator import load_config
-from mazeslam.filters.corners import CornerExtractor
-from mazeslam.loaded_run import LoadedRun, load_run
-from mazeslam.robot.omnicam import CameraCalibration
-from mazeslam.slam import load_slam_config
+from mazeslam.core.beams import SensorOverrides
+from mazeslam.core.mirror import CameraCalibration
+from mazeslam.data.loaded_run import LoadedRun, load_run
+from mazeslam.features.corners import CornerExtractor
+from mazeslam.pipeline import load_slam_config
+from mazeslam.sim.simulator import load_config
 
 HERE = Path(__file__).resolve().parent
 PROJECT = HERE.parents[1]
@@ -334,7 +334,7 @@ def summary(table: pd.DataFrame, distortion: dict, fixed: dict[str, dict], stand
 
     return f"""# The simulated course robot's scans beside log1's
 
-`python experiments/course_robot/sensor_comparison.py`: log1 (beam 0 forward) and
+`python -m experiments.course_robot.sensor_comparison`: log1 (beam 0 forward) and
 configs/simulation_course_robot.toml with seeds {", ".join(map(str, SEEDS))}. **Wall scatter**: RMS
 distance of the scan points within +-{HALF_BIN} m of the range to the straight line fitted through
 their wall (configs/course.toml's split-and-merge, every bearing, 0.05-0.45 m). **Beam-to-beam

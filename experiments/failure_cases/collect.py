@@ -1,6 +1,6 @@
 """One table of every failure case and remedy, from the case sweeps' results.
 
-    python experiments/failure_cases/collect.py     (after running each case's sweep.toml)
+    python -m experiments.failure_cases.collect     (after running each case's sweep.toml)
 
 Writes table.md beside this file: per case and filter variant, the mean over the seeds (median NEES:
 each run's median over its records, then the mean over the seeds; NIS: mean over the associated

@@ -1,7 +1,7 @@
 """Where configs/mrclam.toml's noise terms come from: ``mazeslam calibrate`` on each robot of MRCLAM
 Dataset 6 alone and on all five together (the pooled fit the config uses).
 
-    python experiments/mrclam/calibration.py [--data ../shared/data/mrclam/MRCLAM_Dataset6]   (about a minute)
+    python -m experiments.mrclam.calibration [--data ../shared/data/mrclam/MRCLAM_Dataset6]   (about a minute)
 
 Writes ``calibration.md`` beside this script.
 """
@@ -14,10 +14,10 @@ from pathlib import Path
 
 import pandas as pd
 
-from mazeslam.evaluation.calibration import Calibration, calibrate_logs
-from mazeslam.imports.mrclam import import_mrclam
-from mazeslam.loaded_run import load_run
-from mazeslam.slam import load_slam_config
+from mazeslam.calibration.noise import Calibration, calibrate_logs
+from mazeslam.data.loaded_run import load_run
+from mazeslam.data.mrclam import import_mrclam
+from mazeslam.pipeline import load_slam_config
 
 HERE = Path(__file__).resolve().parent
 ROOT = HERE.parents[1]
@@ -56,7 +56,7 @@ def main() -> None:
         "`mazeslam calibrate` on MRCLAM Dataset 6 against the motion-capture truth, each robot alone and the five "
         "together (every fit made once over all their odometry stretches and landmark observations). A single "
         "robot's non-negative fit can trade one odometry term for another (a 0 below); the pooled fit is the "
-        "config's. `python experiments/mrclam/calibration.py`.\n\n"
+        "config's. `python -m experiments.mrclam.calibration`.\n\n"
         + pd.DataFrame(rows).set_index("logs").to_markdown(floatfmt=["", *[".3g"] * 5, ".0f", ".0f", ".0f"])
         + "\n"
     )

@@ -1,6 +1,6 @@
 """How configs/mrclam.toml's consistency margin (``[fastslam] likelihood_exponent``) is chosen.
 
-    python experiments/mrclam/margin.py [--data ../shared/data/mrclam/MRCLAM_Dataset6]   (about 20 minutes)
+    python -m experiments.mrclam.margin [--data ../shared/data/mrclam/MRCLAM_Dataset6]   (about 20 minutes)
 
 The simulated mazes' rule (experiments/consistency/margin.py), on the dataset's other robots:
 MRCLAM Dataset 6 robots 2-5, configs/mrclam.toml (unknown association) but the exponent, tried
@@ -21,16 +21,16 @@ from __future__ import annotations
 import argparse
 import dataclasses
 import tempfile
-from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 
 import pandas as pd
 
+from mazeslam.data.loaded_run import load_run
+from mazeslam.data.mrclam import import_mrclam
 from mazeslam.evaluation.consistency import POSE_BOUND_95, choose_margin, nis_summary
-from mazeslam.evaluation.scoring import DEAD_RECKONING, FILTER_MEAN, score_run
-from mazeslam.imports.mrclam import import_mrclam
-from mazeslam.loaded_run import load_run
-from mazeslam.slam import load_slam_config, slam_on_run
+from mazeslam.evaluation.scoring import DEAD_RECKONING, score_run
+from mazeslam.pipeline import load_slam_config, run_slam
+from mazeslam.sweeps.pool import map_parallel
 
 HERE = Path(__file__).resolve().parent
 ROOT = HERE.parents[1]
@@ -54,14 +54,14 @@ def one_run(data: Path, robot: int, exponent: float, particles: int) -> dict:
         config = dataclasses.replace(
             config, fastslam=dataclasses.replace(config.fastslam, likelihood_exponent=exponent, NPARTICLES=particles)
         )
-        result = slam_on_run(run, config, progress=False)
+        result = run_slam(run, config, progress=False)
         score = score_run(run, result, config.evaluation.match_radius)
     assert score is not None  # the import writes the truth
     return {
         "robot": robot,
         "particles": particles,
         "likelihood_exponent": exponent,
-        "median_nees": score.table.loc[FILTER_MEAN, "median_nees"],
+        "median_nees": score.table.loc[score.mean_row, "median_nees"],
         "nees_inside_95": score.nees_summary["inside_95"],
         "nis_mean": nis_summary(result.nis)["mean"],
         "resampled_fraction": result.resampled_fraction,
@@ -73,11 +73,11 @@ def one_run(data: Path, robot: int, exponent: float, particles: int) -> dict:
     }
 
 
-def runs(pool: ProcessPoolExecutor, data: Path, exponents: list[float], particles: int) -> pd.DataFrame:
+def runs(data: Path, exponents: list[float], particles: int) -> pd.DataFrame:
     """Every robot (the choosing ones and the held-out one) under each of ``exponents``."""
-    jobs = [(robot, exponent) for exponent in exponents for robot in [*CHOOSING_ROBOTS, HELD_OUT_ROBOT]]
-    robots, chosen = zip(*jobs)
-    return pd.DataFrame(pool.map(one_run, [data] * len(jobs), robots, chosen, [particles] * len(jobs)))
+    robots = [*CHOOSING_ROBOTS, HELD_OUT_ROBOT]
+    calls = [(data, robot, exponent, particles) for exponent in exponents for robot in robots]
+    return pd.DataFrame(map_parallel(one_run, calls))
 
 
 def choosing(table: pd.DataFrame) -> pd.Series:
@@ -110,10 +110,9 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--data", type=Path, default=ROOT.parent / "shared" / "data" / "mrclam" / "MRCLAM_Dataset6")
     data = parser.parse_args().data.resolve()
-    with ProcessPoolExecutor(2) as pool:
-        chosen, tables = choose_margin(
-            EXPONENTS, CHECKS, lambda exponents, particles: runs(pool, data, exponents, particles), choosing
-        )
+    chosen, tables = choose_margin(
+        EXPONENTS, CHECKS, lambda exponents, particles: runs(data, exponents, particles), choosing
+    )
     table = pd.concat(tables)
     table.to_csv(HERE / "margin.csv", index=False, float_format="%.6g")
     text = (
@@ -124,7 +123,7 @@ def main() -> None:
         f"{HELD_OUT_ROBOT} is held out (shown, not used). NEES: median over a run's records (consistent: about "
         "2.4); NIS: mean over the associated observations (consistent: 2); resampled: share of the observation "
         "updates; ATE / DR: the worst robot's ATE over its dead reckoning's. "
-        "`python experiments/mrclam/margin.py`.\n\n"
+        "`python -m experiments.mrclam.margin`.\n\n"
         + summary(table).reset_index().to_markdown(index=False, floatfmt=["g", "g", *[".3g"] * 9])
         + "\n"
     )

@@ -1,7 +1,7 @@
 """FastSLAM on UTIAS MRCLAM Dataset 6, robot 1 (Vicon truth) with configs/mrclam.toml: the table in
 docs/fastslam.md.
 
-    python experiments/mrclam/run.py [--data ../shared/data/mrclam/MRCLAM_Dataset6]   (about a minute)
+    python -m experiments.mrclam.run [--data ../shared/data/mrclam/MRCLAM_Dataset6]   (about a minute)
 
 Imports robot 1, runs `mazeslam slam` with unknown and with known association, and writes
 results.md beside this script: ATE RMSE (as estimated and aligned), the map error within 0.5 m,
@@ -39,10 +39,10 @@ def plot_aligned(log: Path, out: Path, path: Path, title: str) -> Path:
     import numpy as np
     import pandas as pd
 
+    from mazeslam.core.motion import dead_reckoning
+    from mazeslam.data.loaded_run import load_run
     from mazeslam.evaluation.metrics import absolute_trajectory_error, align_se2, apply_se2
-    from mazeslam.evaluation.plots import draw_ellipses, save_figure
-    from mazeslam.filters.motion import dead_reckoning
-    from mazeslam.loaded_run import load_run
+    from mazeslam.viz.plots import draw_ellipses, save_figure
 
     run = load_run(log)
     assert run.truth is not None
@@ -90,11 +90,11 @@ def plot_nees_over_time(log: Path, outs: dict[str, Path], path: Path) -> Path:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
+    from mazeslam.data.loaded_run import load_run
+    from mazeslam.data.sidecars import read_trajectory
     from mazeslam.evaluation.consistency import POSE_BOUND_95
     from mazeslam.evaluation.metrics import normalized_estimation_error
-    from mazeslam.evaluation.plots import save_figure
-    from mazeslam.loaded_run import load_run
-    from mazeslam.sidecars import read_trajectory
+    from mazeslam.viz.plots import save_figure
 
     run = load_run(log)
     assert run.truth is not None
@@ -165,7 +165,7 @@ def run(data: Path, figure: Path | None = FIGURE, nees_figure: Path | None = NEE
         if nees_figure is not None:
             plot_nees_over_time(log, {a: Path(folder) / a for a in ("unknown", "known")}, nees_figure)
     return (
-        "MRCLAM Dataset 6, robot 1, `configs/mrclam.toml`, 100 particles (`python experiments/mrclam/run.py`). "
+        "MRCLAM Dataset 6, robot 1, `configs/mrclam.toml`, 100 particles (`python -m experiments.mrclam.run`). "
         "Map: aligned landmarks within 0.5 m of a surveyed one; NEES: median over the records (consistent: about 2.4); "
         "NIS: mean over the associated observations (consistent: 2).\n\n"
         "| | ATE RMSE | aligned | map RMSE aligned | median NEES | NIS | resampled |\n"

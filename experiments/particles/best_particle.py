@@ -1,7 +1,7 @@
 """Why the map gets worse with more particles: the map is the best-weighted particle's, and that
 particle's own path is farther from the truth than the cloud's mean.
 
-    python experiments/particles/best_particle.py     (seeds 0 and 1, 100 and 1000 particles; ~1 min)
+    python -m experiments.particles.best_particle     (seeds 0 and 1, 100 and 1000 particles; ~1 min)
 
 Writes best_particle.md beside this file: per seed and particle count, the ATE of the mean path and
 of the best particle's path (as estimated and aligned, mm), and the aligned map error (mm), as in the
@@ -17,12 +17,11 @@ from pathlib import Path
 import pandas as pd
 
 from mazeslam import simulate
-from mazeslam.evaluation.scoring import FILTER_MEAN, score_run
-from mazeslam.loaded_run import load_run
-from mazeslam.slam import SlamConfig, slam_on_run
+from mazeslam.data.loaded_run import load_run
+from mazeslam.evaluation.scoring import score_run
+from mazeslam.pipeline import SlamConfig, run_slam
 
 HERE = Path(__file__).resolve().parent
-BEST = "FastSLAM (best particle)"
 
 
 def main(seeds=(0, 1), counts=(100, 1000)) -> pd.DataFrame:
@@ -35,15 +34,15 @@ def main(seeds=(0, 1), counts=(100, 1000)) -> pd.DataFrame:
             config = dataclasses.replace(
                 config, fastslam=dataclasses.replace(config.fastslam, NPARTICLES=count, seed=seed)
             )
-            score = score_run(run, slam_on_run(run, config, progress=False))
+            score = score_run(run, run_slam(run, config, progress=False))
             rows.append(
                 {
                     "seed": seed,
                     "particles": count,
-                    "mean path ATE [mm]": 1000 * score.ate(FILTER_MEAN),
-                    "mean path ATE aligned [mm]": 1000 * score.ate(FILTER_MEAN, aligned=True),
-                    "best particle ATE [mm]": 1000 * score.ate(BEST),
-                    "best particle ATE aligned [mm]": 1000 * score.ate(BEST, aligned=True),
+                    "mean path ATE [mm]": 1000 * score.ate(),
+                    "mean path ATE aligned [mm]": 1000 * score.ate(aligned=True),
+                    "best particle ATE [mm]": 1000 * score.ate(score.best_row),
+                    "best particle ATE aligned [mm]": 1000 * score.ate(score.best_row, aligned=True),
                     "map aligned [mm]": 1000 * score.map_errors["aligned"]["rmse"],
                     "median NEES": score.nees_summary["median"],
                 }
@@ -56,7 +55,7 @@ if __name__ == "__main__":
     table[["seed", "particles"]] = table[["seed", "particles"]].astype(str)
     text = (
         "Default settings (FastSLAM 2.0), default maze runs; the map is the best-weighted particle's "
-        "(`python experiments/particles/best_particle.py`).\n\n" + table.to_markdown(index=False, floatfmt=".2f") + "\n"
+        "(`python -m experiments.particles.best_particle`).\n\n" + table.to_markdown(index=False, floatfmt=".2f") + "\n"
     )
     (HERE / "best_particle.md").write_text(text)
     print(text)

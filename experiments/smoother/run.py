@@ -1,6 +1,6 @@
 """FastSLAM beside the batch optimum on simulated default logs: writes results.csv and results.md here.
 
-    .venv/bin/python experiments/smoother/run.py [--seeds 404 505 606 707 808] [--config FILE] [--workers 2]
+    python -m experiments.smoother.run [--seeds 404 505 606 707 808] [--config FILE] [--workers 2]
 
 Per seed: simulate the default maze run, then score against its truth (ATE RMSE at every record, as
 estimated and after the best rigid alignment; NEES of the pose): dead reckoning, FastSLAM (seeded
@@ -18,25 +18,24 @@ import dataclasses
 import subprocess
 import tempfile
 import time
-from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 
 import numpy as np
 import pandas as pd
 
-from mazeslam.config import with_changes
-from mazeslam.envs.simulator import simulate
+from mazeslam.core.config import with_changes
+from mazeslam.data.loaded_run import load_run
 from mazeslam.evaluation.consistency import nees_summary
 from mazeslam.evaluation.metrics import normalized_estimation_error
 from mazeslam.evaluation.scoring import (
     DEAD_RECKONING,
-    FILTER_MEAN,
     error_table,
     score_run,
 )
-from mazeslam.loaded_run import load_run
-from mazeslam.slam import SlamConfig, load_slam_config, slam_on_run
-from mazeslam.smooth_command import Smoothed, known_optimum, map_identities, smooth_run
+from mazeslam.pipeline import SlamConfig, load_slam_config, run_slam
+from mazeslam.sim.simulator import simulate
+from mazeslam.smoothing.optimum import Smoothed, known_optimum, map_identities, smooth_run
+from mazeslam.sweeps.pool import map_parallel
 
 HERE = Path(__file__).resolve().parent
 SEEDS = [404, 505, 606, 707, 808]
@@ -63,13 +62,13 @@ def seed_rows(seed: int, config: SlamConfig) -> list[dict]:
     for name, changes in FILTERS.items():
         filter_config = dataclasses.replace(config, fastslam=with_changes(config.fastslam, seed=seed, **changes))
         started = time.perf_counter()
-        result = slam_on_run(run, filter_config, progress=False)
+        result = run_slam(run, filter_config, progress=False)
         seconds = time.perf_counter() - started
         score = score_run(run, result, radius)
         if name == ASSOCIATION_FROM:
             rows.append(_row(seed, DEAD_RECKONING, score.table.loc[DEAD_RECKONING]))
             from_run = smooth_run(run, config, map_identities(run, result.mean_poses, result.landmarks, radius))
-        rows.append(_row(seed, name, score.table.loc[FILTER_MEAN], score.nees_summary, seconds=seconds))
+        rows.append(_row(seed, name, score.table.loc[score.mean_row], score.nees_summary, seconds=seconds))
     for name, smoothed in ((OPTIMUM, known_optimum(run, config)), (OPTIMUM_FROM_RUN, from_run)):
         rows.append(_optimum_row(seed, name, smoothed, run.truth, score.records))
     return rows
@@ -150,8 +149,8 @@ def main():
     parser.add_argument("--workers", type=int, default=2, help="processes, one seed each")
     arguments = parser.parse_args()
     config = load_slam_config(arguments.config)
-    with ProcessPoolExecutor(arguments.workers) as pool:
-        rows = [row for rows in pool.map(seed_rows, arguments.seeds, [config] * len(arguments.seeds)) for row in rows]
+    calls = [(seed, config) for seed in arguments.seeds]
+    rows = [row for rows in map_parallel(seed_rows, calls, arguments.workers) for row in rows]
     table = pd.DataFrame(rows)
     table.to_csv(HERE / "results.csv", index=False)
     commit = subprocess.run(

@@ -5,16 +5,16 @@ For each seed: simulate the default run (random 4 x 4 maze, full exploration tou
 FastSLAM 1.0 and FastSLAM 2.0 (100 particles, default settings otherwise: FastSLAM 2.0 is the
 default) and score each as ``mazeslam slam`` does (dead reckoning beside it; the optimum: the batch
 least-squares solution with the filter's noise model and the true association). Writes
-``fastslam_default_maze.md`` (per seed and means) and ``.csv`` beside this script, and the default
+``results.md`` (per seed and means) and ``results.csv`` beside this script, and the default
 filter's figure of seed 0 to ``docs/img/fastslam_default_maze.png``.
-Run: ``python experiments/fastslam_default_maze.py`` (about a minute).
+Run: ``python -m experiments.fastslam_default_maze.run`` (about a minute).
 
 ``--filter-seeds K`` runs each filter with K seeds of its own random draws (the table's rows
 are then per seed and filter seed). ``--ideal`` measures the floor of this setting instead: a
 noise-free laser, corners named from the truth (known association), a tight sensor model (each
 corner's own covariance plus 0.5 mm and 0.1 degree) and 1000 particles; what error remains is the
 drift of a map built from what the sensor can see, not noise or association. Both variants print
-their tables and write ``fastslam_default_maze_<variant>.md``, no figure.
+their tables and write ``results_<variant>.md`` and ``.csv``, no figure.
 """
 
 from __future__ import annotations
@@ -28,17 +28,18 @@ from pathlib import Path
 import pandas as pd
 
 from mazeslam import simulate
-from mazeslam.envs.simulator import SimulationConfig
-from mazeslam.evaluation import slam_report
+from mazeslam.data.loaded_run import load_run
+from mazeslam.data.scans import scan_points_world
 from mazeslam.evaluation.consistency import nis_summary
 from mazeslam.evaluation.scoring import DEAD_RECKONING, score_run
-from mazeslam.filters.fastslam import FastSLAMParams
-from mazeslam.loaded_run import load_run
-from mazeslam.slam import SlamConfig, slam_on_run
-from mazeslam.smooth_command import optimum_columns
+from mazeslam.fastslam.filter import FastSLAMParams
+from mazeslam.pipeline import SlamConfig, run_slam
+from mazeslam.sim.simulator import SimulationConfig
+from mazeslam.smoothing.optimum import optimum_columns
+from mazeslam.viz import slam_figure as slam_report
 
 HERE = Path(__file__).resolve().parent
-FIGURE = HERE.parent / "docs" / "img" / "fastslam_default_maze.png"
+FIGURE = HERE.parents[1] / "docs" / "img" / "fastslam_default_maze.png"
 SEEDS = range(5)
 IDEAL_FILTER = dict(association="known", sigmaR=0.0005, sigmaB=math.radians(0.1), NPARTICLES=1000)
 
@@ -55,7 +56,7 @@ def rows_for(seed: int, folder: Path, filter_seeds: int = 1, ideal: bool = False
                 FastSLAMParams(), version=version, seed=filter_seed, **(IDEAL_FILTER if ideal else {})
             )
             slam_config = SlamConfig(fastslam=params)
-            result = slam_on_run(run, slam_config, progress=False)
+            result = run_slam(run, slam_config, progress=False)
             score = score_run(run, result, slam_config.evaluation.match_radius)
             if not rows:
                 rows.append(
@@ -87,7 +88,7 @@ def rows_for(seed: int, folder: Path, filter_seeds: int = 1, ideal: bool = False
                 }
             )
             if figure and seed == 0 and filter_seed == 0 and version == FastSLAMParams().version:
-                points = slam_report.scan_points_world(
+                points = scan_points_world(
                     run.log,
                     result.mean_poses,
                     run.geometry,
@@ -124,8 +125,8 @@ def markdown(table: pd.DataFrame) -> str:
     means["ate_vs_reckoning_max"] = spread[("ate_rmse_vs_reckoning", "max")]
     means["runs_within_a_third"] = table.groupby("estimator").ate_rmse_vs_reckoning.apply(lambda r: (r <= 1 / 3).mean())
     return (
-        "Default simulated maze runs, seeds 0-4, 100 particles, default settings (`python "
-        "experiments/fastslam_default_maze.py`; `--filter-seeds K`: K filter seeds per maze; `--ideal`: "
+        "Default simulated maze runs, seeds 0-4, 100 particles, default settings (`python -m "
+        "experiments.fastslam_default_maze.run`; `--filter-seeds K`: K filter seeds per maze; `--ideal`: "
         "noise-free laser, known association, 1000 particles). Lengths in metres; NEES: median over the "
         "run's records (consistent: 3); NIS: mean over associated observations (consistent: 2); optimum ratio: the "
         "filter's ATE over the batch optimum's (1: as good as any estimator).\n\n## Per seed\n\n"
@@ -145,10 +146,10 @@ if __name__ == "__main__":
     plain = arguments.filter_seeds == 1 and not arguments.ideal
     variant = "" if plain else "_ideal" if arguments.ideal else f"_filter_seeds{arguments.filter_seeds}"
     if arguments.tables_only:
-        result = pd.read_csv(HERE / f"fastslam_default_maze{variant}.csv")
+        result = pd.read_csv(HERE / f"results{variant}.csv")
     else:
         result = main(arguments.filter_seeds, arguments.ideal, figure=plain)
-        result.to_csv(HERE / f"fastslam_default_maze{variant}.csv", index=False)
+        result.to_csv(HERE / f"results{variant}.csv", index=False)
     text = markdown(result)
     print(text)
-    (HERE / f"fastslam_default_maze{variant}.md").write_text(text)
+    (HERE / f"results{variant}.md").write_text(text)

@@ -1,0 +1,1 @@
+"""blind_cloud: see this folder's README.md."""

@@ -1,0 +1,1 @@
+"""calibration: see this folder's README.md."""

@@ -1,0 +1,1 @@
+"""carmen: see this folder's README.md."""

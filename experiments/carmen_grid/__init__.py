@@ -1,0 +1,1 @@
+"""carmen_grid: see this folder's README.md."""

@@ -1,0 +1,1 @@
+"""consistency: see this folder's README.md."""

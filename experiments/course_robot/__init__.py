@@ -1,0 +1,1 @@
+"""course_robot: see this folder's README.md."""

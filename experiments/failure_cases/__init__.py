@@ -1,0 +1,1 @@
+"""failure_cases: see this folder's README.md."""

@@ -1,0 +1,1 @@
+"""fastslam_default_maze: see this folder's README.md."""

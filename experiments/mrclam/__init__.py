@@ -1,0 +1,1 @@
+"""mrclam: see this folder's README.md."""

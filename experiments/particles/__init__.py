@@ -1,0 +1,1 @@
+"""particles: see this folder's README.md."""

@@ -1,0 +1,1 @@
+"""smoother: see this folder's README.md."""
