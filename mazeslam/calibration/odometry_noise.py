@@ -1,6 +1,6 @@
 """Measure a log's odometry noise against its truth, in the units of the filter's motion model.
 
-FastSLAM's motion model (``filters/motion.py``) lets each odometry step of distance d and turn
+FastSLAM's motion model (``mazeslam.core.motion``) lets each odometry step of distance d and turn
 dtheta err by variances that grow with the motion:
 
     var(distance error) = sigmaX^2 |d|

@@ -1,4 +1,4 @@
-"""``mazeslam smooth``: the batch least-squares optimum of a log (``filters/smoother.py``), its outputs,
+"""``mazeslam smooth``: the batch least-squares optimum of a log (``mazeslam.smoothing.smoother``), its outputs,
 and the optimum beside a FastSLAM run (``mazeslam slam`` and sweeps report the filter's ratio to it).
 
 Association, which landmark each corner is, comes from outside the smoother:

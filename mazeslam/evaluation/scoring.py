@@ -53,7 +53,7 @@ COLUMNS = (
 NEES_COLUMNS = ("mean_nees", "median_nees")
 
 
-@dataclass
+@dataclass(kw_only=True)
 class RunScore:
     """A run's errors against the truth.
 
@@ -201,4 +201,12 @@ def score_run(run: LoadedRun, result: SlamResult, match_radius: float = 0.05) ->
             "as estimated": map_error(result.landmarks, run.true_corners, match_radius),
             "aligned": map_error(aligned, run.true_corners, match_radius),
         }
-    return RunScore(records, name, rows, nees, summary, alignment, map_errors)
+    return RunScore(
+        records=records,
+        filter_name=name,
+        rows=rows,
+        nees=nees,
+        nees_summary=summary,
+        alignment=alignment,
+        map_errors=map_errors,
+    )

@@ -426,7 +426,7 @@ class GridSlam:
         return poses, mean, (deviation * weights[:, None]).T @ deviation
 
 
-@dataclass
+@dataclass(kw_only=True)
 class GridSlamResult:
     """A grid filter run over a log.
 
@@ -584,24 +584,24 @@ def run_grid_slam(
             on_scan(int(records[index]), slam)
     best = slam.best_particle()
     return GridSlamResult(
-        records,
-        course_log.times[records],
-        _backtrack(node_poses, node_parents, best),
-        mean_poses,
-        covariances,
-        processed,
-        matched,
-        nis,
-        neff,
-        resampled,
-        slam.maps[best],
-        seconds,
-        motion_seconds,
-        peak_map_bytes,
-        slam,
-        odometry_at_record_times(course_log, start_pose),
-        np.asarray(start_pose, dtype=float),
-        snapshots,
+        scan_records=records,
+        times=course_log.times[records],
+        best_poses=_backtrack(node_poses, node_parents, best),
+        mean_poses=mean_poses,
+        covariances=covariances,
+        processed=processed,
+        matched=matched,
+        nis=nis,
+        neff=neff,
+        resampled=resampled,
+        grid=slam.maps[best],
+        seconds=seconds,
+        motion_seconds=motion_seconds,
+        peak_map_bytes=peak_map_bytes,
+        particles=slam,
+        reckoned=odometry_at_record_times(course_log, start_pose),
+        reckoned_start=np.asarray(start_pose, dtype=float),
+        snapshots=snapshots,
     )
 
 

@@ -30,7 +30,7 @@ from mazeslam.smoothing.smoother import SmoothingResult, expand_to_records, smoo
 OPTIMUM = "batch optimum"
 
 
-@dataclass
+@dataclass(kw_only=True)
 class Smoothed:
     """The optimum of a log and its poses at every record.
 
@@ -60,7 +60,7 @@ def smooth_run(run: LoadedRun, config: SlamConfig, identify) -> Smoothed:
     poses = expand_to_records(course_log, result, run.start_pose)
     anchor = np.searchsorted(result.scan_records, np.arange(len(course_log)), side="right") - 1
     covariances = result.pose_covariances[np.maximum(anchor, 0)]
-    return Smoothed(result, poses, covariances, time.perf_counter() - started)
+    return Smoothed(result=result, poses=poses, covariances=covariances, seconds=time.perf_counter() - started)
 
 
 def has_known_optimum(run: LoadedRun) -> bool:

@@ -1,5 +1,6 @@
-"""``mazeslam slam`` with ``[map] kind = "grid"`` on a simulated building: the map_server map, the
-trajectory with its covariance, the errors; and the loop it closes where corner FastSLAM does not."""
+"""The grid filter through the one pipeline on a simulated building: ``mazeslam slam`` with
+``[map] kind = "grid"`` (the map_server map, the trajectory with its covariance, the errors), the
+Python API choosing the filter the config names, and the loop it closes where corner FastSLAM does not."""
 
 import json
 
