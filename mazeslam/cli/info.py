@@ -6,6 +6,7 @@ from __future__ import annotations
 from pathlib import Path
 
 import click
+import numpy as np
 
 from mazeslam.cli.options import FINITE
 from mazeslam.data import log
@@ -36,12 +37,17 @@ def info(log_file, lenient, detect_beams, config_path, mount_x):
         f"  records           {facts['records']} ({facts['odometry_records']} odometry, "
         f"{facts['scan_records']} scans, {facts['landmark_records']} landmark observations)"
     )
-    click.echo(f"  time              {facts['start_s']:.3f} s + {facts['duration_s']:.3f} s")
+    click.echo(f"  time              {facts['duration_s']:.3f} s long, from {facts['start_s']:.3f} s")
     click.echo(f"  beams per scan    {facts['beams'] if facts['beams'] is not None else 'no scans'}")
     click.echo(
         f"  odometry travel   {facts['distance_m']:.3f} m, turned {facts['total_rotation_rad']:.3f} rad "
         f"in all (net {facts['net_rotation_rad']:+.3f} rad)"
     )
+    if facts["odometry_records"]:
+        steps = np.abs(course_log.increments[:, 0])
+        longest = int(np.argmax(steps))
+        line = f" (line {course_log.line_numbers[longest]})" if course_log.line_numbers is not None else ""
+        click.echo(f"  longest step      {steps[longest]:.3f} m{line}")
     if facts["scan_records"]:
         click.echo(
             f"  ranges            max {facts['max_range_m']:.3f} m, {100 * facts['no_return_fraction']:.1f} % no return"

@@ -23,6 +23,8 @@ MAX_MAZE_CELLS = 10_000
 CELL_BYTES = 2_000
 #: Seconds of one simulated or recorded run (11.6 days).
 MAX_DURATION = 1e6
+#: Cells of a grid filter's map (a float32 log-odds each when drawn or written whole: 1 GB).
+MAX_GRID_CELLS = 250_000_000
 #: Largest seed (numpy takes any non-negative integer; 64 bits are plenty).
 MAX_SEED = 2**63 - 1
 
@@ -60,6 +62,17 @@ def maze_problem(rows: int, cols: int) -> str | None:
         return (
             f"a {rows} x {cols} maze has {cells} cells, which would take about "
             f"{human_bytes(cells * CELL_BYTES)} to simulate and days to explore; at most {MAX_MAZE_CELLS} cells"
+        )
+    return None
+
+
+def grid_map_problem(width: float, height: float, resolution: float) -> str | None:
+    """A grid map ``width`` x ``height`` metres at ``resolution`` metres a cell, if it is too big."""
+    cells = (width / resolution) * (height / resolution)
+    if cells > MAX_GRID_CELLS:
+        return (
+            f"a map of {width:.0f} m x {height:.0f} m at {resolution:g} m a cell has {cells:.3g} cells, which would "
+            f"take about {human_bytes(4 * cells)}; at most {MAX_GRID_CELLS:.3g} cells"
         )
     return None
 
