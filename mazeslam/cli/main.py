@@ -60,9 +60,17 @@ def exit_status(error: BaseException) -> int:
 
 
 def run():
-    """Entry point: turn known errors into a one-line message and exit status 2 (bad input) or 1."""
+    """Entry point: turn known errors into a one-line message and exit status 2 (bad input) or 1;
+    SIGTERM and SIGINT stop the command cleanly (its children and temporary outputs go with it),
+    saying so, with exit status 143 or 130."""
+    from mazeslam.cli.side_process import Interrupted, stop_on_signals
+
     try:
-        main(standalone_mode=True)
+        with stop_on_signals():
+            main(standalone_mode=True)
+    except Interrupted as stop:
+        click.echo(f"interrupted ({stop.signal_name})", err=True)
+        raise
     except KNOWN_ERRORS as error:
         click.echo(f"error: {error}", err=True)
         raise SystemExit(exit_status(error)) from error

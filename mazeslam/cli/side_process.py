@@ -6,21 +6,33 @@ scores the run and writes the other outputs. It is forked (Linux), so it starts 
 already imported here (fork it after the modules both need are loaded, or both load them); where fork
 is not the platform's way (macOS, Windows), or the process cannot start, calls run in this process
 instead, as they do when it has died. An error in the call is raised here, with the other process's
-traceback as its cause. The process ignores Ctrl-C (this one handles it) and ends with this one.
+traceback as its cause. The process ignores Ctrl-C (this one handles it) and ends with this one,
+however this one ends: leaving the ``with`` block (an error, Ctrl-C, ``Interrupted``) terminates it,
+and when this process is killed outright (``kill -9``, SIGTERM without ``stop_on_signals``) it
+notices and ends (``mazeslam.sweeps.pool.end_with_parent``), releasing its memory and the output
+pipes it shares with this one.
+
+``stop_on_signals`` turns SIGTERM (and SIGINT) into ``Interrupted``, an exception that unwinds this
+process like Ctrl-C does (``with`` blocks end their processes, staging folders, locks) and then
+exits with 128 + the signal's number (143, 130), as a process killed by it would report.
 """
 
 from __future__ import annotations
 
+import contextlib
 import importlib
 import multiprocessing
+import os
 import signal
 import sys
 import threading
 import traceback
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from multiprocessing.connection import Connection
 from multiprocessing.reduction import ForkingPickler
 from typing import Any
+
+from mazeslam.sweeps.pool import end_with_parent
 
 
 class RemoteTraceback(Exception):
@@ -42,7 +54,8 @@ class SideProcess:
         try:
             context = multiprocessing.get_context("fork")
             ours, theirs = context.Pipe()
-            process = context.Process(target=_serve, args=(theirs, tuple(modules)), daemon=True)
+            watch = (os.getpid(), threading.main_thread().ident)
+            process = context.Process(target=_serve, args=(theirs, tuple(modules), ours, watch), daemon=True)
             process.start()
         except (OSError, ValueError):  # no fork, no pipes, no processes left: run calls here
             return
@@ -126,9 +139,14 @@ class SideProcess:
         self._stop()
 
 
-def _serve(connection: Connection, modules: tuple[str, ...]) -> None:
-    """The side process: import ``modules``, then run each call received until the pipe closes."""
-    signal.signal(signal.SIGINT, signal.SIG_IGN)
+def _serve(connection: Connection, modules: tuple[str, ...], parents_end: Connection, watch: tuple) -> None:
+    """The side process: import ``modules``, then run each call received until the pipe closes.
+
+    It ends with its parent (``end_with_parent(*watch)``; it ignores Ctrl-C), and closes its copy of
+    the parent's end of the pipe (``parents_end``, inherited by the fork): the parent's death closes
+    the pipe, and a wait for the next call ends on it."""
+    end_with_parent(*watch)
+    parents_end.close()
     for name in modules:
         try:
             importlib.import_module(name)
@@ -145,6 +163,48 @@ def _serve(connection: Connection, modules: tuple[str, ...]) -> None:
             reply = (True, (error, traceback.format_exc()))
         try:
             connection.send(reply)
+        except OSError:  # the parent has gone (or closed its end): no one to answer
+            return
         except Exception as error:  # the value or the error would not pickle: say so
             message = f"{type(error).__name__}: {error}"
-            connection.send((True, (RuntimeError(f"side process: cannot hand back the result: {message}"), "")))
+            try:
+                connection.send((True, (RuntimeError(f"side process: cannot hand back the result: {message}"), "")))
+            except OSError:
+                return
+
+
+class Interrupted(SystemExit):
+    """Raised in the main thread by a signal ``stop_on_signals`` handles. A ``SystemExit`` (exit
+    status ``128 + signum``, 143 for SIGTERM, 130 for SIGINT): ``except Exception`` does not catch it,
+    click lets it through, and ``with`` blocks and ``finally`` clauses run on its way out."""
+
+    def __init__(self, signum: int):
+        super().__init__(128 + signum)
+        self.signum = signum
+
+    @property
+    def signal_name(self) -> str:
+        return signal.Signals(self.signum).name
+
+
+@contextlib.contextmanager
+def stop_on_signals(signals: Sequence[int] = (signal.SIGTERM, signal.SIGINT)) -> Iterator[None]:
+    """Within the block, each of ``signals`` raises ``Interrupted`` in the main thread, once: the
+    handler gives the signal its default action back, so that a second one (a clean stop that does
+    not end) kills the process, its children ending with it. The earlier handlers are restored on
+    leaving. Outside the main thread (where Python cannot set handlers), and for a signal whose
+    handler was set outside Python (which could not be put back), nothing changes."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+
+    def interrupt(signum: int, frame: object) -> None:
+        signal.signal(signum, signal.SIG_DFL)
+        raise Interrupted(signum)
+
+    previous = {signum: signal.signal(signum, interrupt) for signum in signals if signal.getsignal(signum) is not None}
+    try:
+        yield
+    finally:
+        for signum, handler in previous.items():
+            signal.signal(signum, handler)

@@ -1,5 +1,10 @@
 """``mazeslam sweep``: a grid of simulator and filter settings run over seeds (locally or on a Dask
-cluster), into one table, its summary and the report (``mazeslam report``)."""
+cluster), into one table, its summary and the report (``mazeslam report``).
+
+SIGTERM and Ctrl-C stop a sweep promptly and cleanly (``stop_on_signals``): its workers end, the
+finished runs stay in ``runs.jsonl``, the folder's lock is released, one line says so, and the
+command exits with 143 (SIGTERM) or 130 (SIGINT); the same command then resumes it.
+"""
 
 from __future__ import annotations
 
@@ -7,6 +12,7 @@ from pathlib import Path
 
 import click
 
+from mazeslam.cli.side_process import Interrupted, stop_on_signals
 from mazeslam.core.outputs import prepare_output_folder
 
 
@@ -25,11 +31,21 @@ from mazeslam.core.outputs import prepare_output_folder
 def sweep(sweep_file, out_dir, workers, scheduler, quiet):
     """Run a grid of simulator and filter settings over seeds; write one table and its summary."""
     from mazeslam.sweeps.report import make_report
-    from mazeslam.sweeps.runner import load_sweep, run_sweep
+    from mazeslam.sweeps.runner import RESULTS, load_sweep, run_sweep
 
     definition = load_sweep(sweep_file)
     prepare_output_folder(out_dir)
-    result = run_sweep(definition, out_dir, workers, scheduler, progress=not quiet)
+    try:
+        with stop_on_signals():
+            result = run_sweep(definition, out_dir, workers, scheduler, progress=not quiet)
+    except Interrupted as stop:
+        click.echo(
+            ("" if quiet else "\n")  # after the progress bar's line
+            + f"{definition.name}: interrupted ({stop.signal_name}); the finished runs are kept in "
+            f"{out_dir / RESULTS}: the same command resumes the sweep",
+            err=True,
+        )
+        raise
     for problem in result.skipped:
         click.echo(f"warning: {problem}", err=True)
     click.echo(

@@ -24,6 +24,11 @@ together are linked with ``+`` and take lists of values, one per setting::
 the grid's values runs once per seed: simulate (seeded), then FastSLAM (seeded alike), then the
 metrics against the truth. Each finished run is appended at once to ``runs.jsonl`` in the output
 folder, so an interrupted sweep resumes where it stopped; the same seeds give the same table.
+
+An interrupted sweep leaves nothing running: stopped by an exception (Ctrl-C, or SIGTERM when the
+command line turns it into one), it ends its workers at once instead of waiting for the runs they
+are running (whose rows are not written: a resumed sweep runs them again); killed outright, its
+workers notice and end (``mazeslam.sweeps.pool.end_with_parent``).
 """
 
 from __future__ import annotations
@@ -56,6 +61,7 @@ from mazeslam.evaluation.scoring import DEAD_RECKONING, score_run
 from mazeslam.pipeline import SlamConfig, load_slam_config, run_slam
 from mazeslam.sim.simulator import SimulationConfig, load_config, simulate
 from mazeslam.smoothing.optimum import has_known_optimum, known_optimum, optimum_columns
+from mazeslam.sweeps.pool import ends_with_this_process
 
 RESULTS = "runs.jsonl"
 MAPS = "maps"
@@ -326,7 +332,12 @@ def execute_run(sweep: Sweep, run: dict, maps_folder: str | None = None, logs_fo
             "trajectory": apply_se2(score.alignment, result.mean_poses)[:, :2].round(5).tolist(),
             "truth": truth[:, :2].round(5).tolist(),
         }
-        Path(maps_folder, f"{row['run_id']}.json").write_text(json.dumps(document, allow_nan=False))
+        # Written beside and renamed: a worker killed mid-write leaves no torn map (and the same
+        # partial file is overwritten when the run runs again).
+        path = Path(maps_folder, f"{row['run_id']}.json")
+        partial = path.with_name(f".{path.name}.partial")
+        partial.write_text(json.dumps(document, allow_nan=False))
+        os.replace(partial, path)
     return row
 
 
@@ -406,11 +417,13 @@ def run_sweep(
         with (out_dir / RESULTS).open("a") as results:
             if results.tell() and not (out_dir / RESULTS).read_bytes().endswith(b"\n"):
                 results.write("\n")  # after a torn last line, the next result starts a line of its own
-            for row in _execute(sweep, pending, str(out_dir / MAPS), workers, scheduler):
-                results.write(json.dumps(jsonable(row), allow_nan=False) + "\n")
-                results.flush()
-                done[row["run_id"]] = row
-                bar.update(1)
+            # Stopped early, the workers end here, under the lock (not once the generator is collected).
+            with contextlib.closing(_execute(sweep, pending, str(out_dir / MAPS), workers, scheduler)) as rows:
+                for row in rows:
+                    results.write(json.dumps(jsonable(row), allow_nan=False) + "\n")
+                    results.flush()
+                    done[row["run_id"]] = row
+                    bar.update(1)
         bar.close()
         order = {run_id(sweep, run): k for k, run in enumerate(sweep.runs())}
         table = pd.DataFrame(
@@ -512,14 +525,27 @@ WORKER_MODULES = ("scipy.optimize",)
 @contextlib.contextmanager
 def _local_pool(workers: int | None):
     """``workers`` local processes (default: one per core), forked once for every phase of a sweep;
-    None for one worker (the runs go in this process)."""
+    None for one worker (the runs go in this process).
+
+    The workers end with this process (``ends_with_this_process``). Left by an exception (an error,
+    Ctrl-C, ``Interrupted`` by SIGTERM, the generator of rows closed early), the pool's workers are
+    terminated at once: ``ProcessPoolExecutor.shutdown`` would wait for the runs they are running,
+    minutes for a large one, while their rows would not be written anyway."""
     if workers == 1:
         yield None
         return
     for name in WORKER_MODULES:
         importlib.import_module(name)
-    with ProcessPoolExecutor(max_workers=workers) as pool:
+    pool = ProcessPoolExecutor(max_workers=workers, **ends_with_this_process())
+    try:
         yield pool
+    except BaseException:
+        # The executor has no public way to end its workers before Python 3.14 (terminate_workers).
+        for process in list((getattr(pool, "_processes", None) or {}).values()):
+            process.terminate()
+        raise
+    finally:
+        pool.shutdown(wait=True, cancel_futures=True)
 
 
 def _locally(pool: ProcessPoolExecutor | None, function, calls: list[tuple]):
