@@ -9,6 +9,7 @@ noise beside them for the laser) beside this script.
 
 from __future__ import annotations
 
+import argparse
 import tempfile
 from pathlib import Path
 
@@ -67,4 +68,6 @@ def main() -> None:
 
 
 if __name__ == "__main__":
+    # No options; --help says what the script does (it rewrites its committed results).
+    argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter).parse_args()
     main()

@@ -16,6 +16,7 @@ Writes experiments/course_robot/filters.csv (a row per log, filter, seed and pat
 
 from __future__ import annotations
 
+import argparse
 import sys
 from pathlib import Path
 
@@ -40,6 +41,8 @@ COURSE = PROJECT / "configs" / "course.toml"
 FILTER_SEEDS = range(5)
 SIMULATION_SEEDS = range(201, 206)
 TABLE = HERE / "filters.csv"
+#: Where the rows go while the script runs; it replaces ``TABLE`` once every row is in.
+PARTIAL = HERE / "filters.csv.partial"
 FILTER_NAMES = {MapKind.GRID: "grid filter", MapKind.LANDMARKS: "corner FastSLAM"}
 COLUMNS = ["log", "filter", "seed", "path", "sharpness_ratio", "extent_ratio", "final_cloud_max_m", "ate_rmse_m"]
 COLUMNS += ["dead_reckoning_ate_rmse_m", "odometry_ate_rmse_m", "true_extent_ratio", "nees_median", "motion_nis_mean"]
@@ -91,7 +94,7 @@ def rows_for(run: LoadedRun, config: SlamConfig, log_name: str, seeds) -> list[d
                         nees = normalized_estimation_error(poses[moved], covariances[moved], run.truth[moved])
                         row["nees_median"] = nees_summary(nees)["median"]
                 rows.append(row)
-                pd.DataFrame([row], columns=COLUMNS).to_csv(TABLE, mode="a", header=not TABLE.exists(), index=False)
+                pd.DataFrame([row], columns=COLUMNS).to_csv(PARTIAL, mode="a", header=not PARTIAL.exists(), index=False)
                 print(row, flush=True)
     return rows
 
@@ -105,7 +108,7 @@ def summary(table: pd.DataFrame) -> pd.DataFrame:
 
 def main() -> None:
     config = load_slam_config(COURSE)
-    TABLE.unlink(missing_ok=True)
+    PARTIAL.unlink(missing_ok=True)
     rows = []
     if LOG1.exists():
         run = with_detected_convention(load_run(LOG1, config.sensor), config)
@@ -118,9 +121,12 @@ def main() -> None:
         path = folder / f"course_sim_{seed}.log"
         simulate(path, load_config(SIMULATION), seed=seed, progress=False)
         rows += rows_for(load_run(path), config, f"simulated seed {seed}", [0])
+    PARTIAL.replace(TABLE)
     table = summary(pd.DataFrame(rows))
     (HERE / "filters.md").write_text(table.to_markdown(floatfmt=".3f") + "\n")
 
 
 if __name__ == "__main__":
+    # No options; --help says what the script does (it rewrites its committed results).
+    argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter).parse_args()
     main()

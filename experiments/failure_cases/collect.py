@@ -7,6 +7,7 @@ each run's median over its records, then the mean over the seeds; NIS: mean over
 observations; resampled: share of scans; optimum: the batch least-squares solution of the same log).
 """
 
+import argparse
 from pathlib import Path
 
 import pandas as pd
@@ -56,4 +57,6 @@ def main():
 
 
 if __name__ == "__main__":
+    # No options; --help says what the script does (it rewrites its committed results).
+    argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter).parse_args()
     main()
