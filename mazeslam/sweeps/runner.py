@@ -15,15 +15,18 @@ A sweep file::
 
 Grid keys name a setting by its place: ``sim.<section>.<name>`` in the simulator's config
 (sections robot, laser, odometry, logger, drive, maze), ``slam.<section>.<name>`` in the slam
-config (fastslam, corners, corners.lines, sensor, odometry, evaluation). Settings that move
-together are linked with ``+`` and take lists of values, one per setting::
+config (map, fastslam, grid, grid.grid, grid.match, corners, corners.lines, sensor, odometry,
+scan_matching, evaluation): ``"slam.map.kind" = ["landmarks", "grid"]`` runs both filters, and a
+filter's settings may be varied only where some run uses that filter. Settings that move together
+are linked with ``+`` and take lists of values, one per setting::
 
     "slam.fastslam.sigmaR+slam.fastslam.sigmaB" = [[0.001, 0.006], [0.003, 0.017], [0.01, 0.05]]
 
 (in the table such a cell's value is written ``0.001/0.006``). Every combination of
-the grid's values runs once per seed: simulate (seeded), then FastSLAM (seeded alike), then the
-metrics against the truth. Each finished run is appended at once to ``runs.jsonl`` in the output
-folder, so an interrupted sweep resumes where it stopped; the same seeds give the same table.
+the grid's values runs once per seed: simulate (seeded), then the filter ``[map] kind`` names
+(seeded alike, ``mazeslam.pipeline.run_slam``), then the metrics against the truth. Each
+finished run is appended at once to ``runs.jsonl`` in the output folder, so an interrupted sweep
+resumes where it stopped; the same seeds give the same table.
 
 An interrupted sweep leaves nothing running: stopped by an exception (Ctrl-C, or SIGTERM when the
 command line turns it into one), it ends its workers at once instead of waiting for the runs they
@@ -58,7 +61,7 @@ from mazeslam.core.limits import MAX_SEED, duration_problem
 from mazeslam.data.loaded_run import load_run
 from mazeslam.evaluation.metrics import apply_se2
 from mazeslam.evaluation.scoring import DEAD_RECKONING, score_run
-from mazeslam.pipeline import SlamConfig, load_slam_config, run_slam
+from mazeslam.pipeline import MapKind, SlamConfig, load_slam_config, run_slam
 from mazeslam.sim.simulator import SimulationConfig, load_config, simulate
 from mazeslam.smoothing.optimum import has_known_optimum, known_optimum, optimum_columns
 from mazeslam.sweeps.pool import ends_with_this_process
@@ -161,7 +164,26 @@ def load_sweep(path: str | Path) -> Sweep:
             configure(sweep, run["settings"])
         except (ConfigError, ValueError, TypeError) as error:
             raise ConfigError(f"{path}: {error}") from error
+    _check_filter_settings(sweep, path)
     return sweep
+
+
+#: The settings of each filter, as sweep keys start, and the map kind that runs it.
+FILTER_SETTINGS = {"slam.grid.": MapKind.GRID, "slam.fastslam.": MapKind.LANDMARKS}
+
+
+def _check_filter_settings(sweep: Sweep, path: Path) -> None:
+    """Refuse a sweep that varies a filter's settings when none of its runs uses that filter (a grid
+    filter setting where every run maps landmarks, or the reverse): its cells would differ in name only."""
+    kinds = set(sweep.grid.get("slam.map.kind", [sweep.base_slam().map.kind]))
+    for key in sweep.grid:
+        for prefix, kind in FILTER_SETTINGS.items():
+            if key.startswith(prefix) and kind not in {MapKind(k) for k in kinds}:
+                raise ConfigError(
+                    f"{path}: [grid] varies {key!r}, a setting of the {kind.filter_name}, but every run maps "
+                    f"{', '.join(sorted(map(str, kinds)))} ([map] kind of {sweep.slam_config or 'the defaults'}): "
+                    f'add "slam.map.kind" = ["{kind}"] or a slam_config whose [map] kind is "{kind}"'
+                )
 
 
 def configure(sweep: Sweep, settings: dict) -> tuple[SimulationConfig, SlamConfig]:

@@ -39,6 +39,8 @@ def test_grid_expands_over_every_combination_and_seed(tmp_path):
         ('"slam.fastslam.particles" = [5]', "no setting 'particles'"),
         ('"filter.NPARTICLES" = [5]', "must start with 'sim.' or 'slam.'"),
         ('"sim.laser.beams" = 90', "non-empty lists"),
+        ('"slam.grid.particles" = [5, 30]', "a setting of the grid filter, but every run maps landmarks"),
+        ('"slam.map.kind" = ["grid"]\n"slam.fastslam.NPARTICLES" = [5, 30]', "a setting of the FastSLAM, but every"),
     ],
 )
 def test_bad_sweep_files_are_refused(tmp_path, grid_line, message):
