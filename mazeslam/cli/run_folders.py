@@ -1,14 +1,22 @@
 """Where a command writes its results by default, and how a rerun replaces the last run's files.
 
 Results go to ``runs/<log name>/<command>/`` under the current directory, never beside the input
-log (a data folder may be read-only or shared). A rerun into a folder first removes the files the
-command writes (so that a ``slam.gif`` of an earlier run never sits beside a new ``slam.png``);
-files it does not know are left alone.
+log (a data folder may be read-only or shared). A run writes its files into a staging folder and,
+once every one is written, replaces the files the command writes (``SLAM_FILES``, ``SMOOTH_FILES``)
+with them (``mazeslam.core.outputs.staged_outputs``): a ``slam.gif`` of an earlier run never sits
+beside a new ``slam.png``, and a run that fails or is interrupted leaves the last run's files as
+they were. Files the command does not know are left alone. Two logs of one name in different
+folders (``a/run.log``, ``b/run.log``) have the same default folder: a run does not replace the
+default folder's run of another log (``check_same_log``); ``--out`` says where it goes instead.
 """
 
 from __future__ import annotations
 
+import json
 from pathlib import Path
+
+from mazeslam.core.outputs import OutputError
+from mazeslam.core.outputs import clear_outputs as clear_outputs  # importable from here, where it was
 
 #: The files ``mazeslam slam`` writes (glob patterns, in its output folder).
 SLAM_FILES = (
@@ -34,13 +42,18 @@ def default_out_dir(log_file: str | Path, command: str, base: str | Path = "runs
     return Path(base) / Path(log_file).stem / command
 
 
-def clear_outputs(folder: str | Path, patterns: tuple[str, ...]) -> list[Path]:
-    """Remove the files of ``folder`` matching ``patterns`` (not folders, not other files);
-    returns those removed."""
-    removed = []
-    for pattern in patterns:
-        for path in sorted(Path(folder).glob(pattern)):
-            if path.is_file() or path.is_symlink():
-                path.unlink()
-                removed.append(path)
-    return removed
+def check_same_log(folder: str | Path, log_file: str | Path, command: str) -> None:
+    """Refuse to replace the run of another log: ``OutputError`` when ``folder``'s ``map.json``
+    records a ``source`` log other than ``log_file`` (the same file however named is the same log).
+    A folder without a readable ``map.json`` or without a ``source`` in it holds no run to keep."""
+    folder = Path(folder)
+    try:
+        source = json.loads((folder / "map.json").read_text(encoding="utf-8")).get("source")
+    except (OSError, ValueError, AttributeError):  # none, unreadable, not JSON, not an object
+        return
+    if not isinstance(source, str) or Path(source).resolve() == Path(log_file).resolve():
+        return
+    raise OutputError(
+        f"{folder} holds the {command} run of another log named {Path(log_file).name} ({source}); "
+        f"give --out for {log_file}, or remove {folder}"
+    )

@@ -10,11 +10,11 @@ from typing import TYPE_CHECKING
 import click
 
 from mazeslam.cli.options import PARTICLES, SEED, beam_geometry_options, geometry_overrides
-from mazeslam.cli.run_folders import SLAM_FILES, clear_outputs, default_out_dir
+from mazeslam.cli.run_folders import SLAM_FILES, check_same_log, default_out_dir
 from mazeslam.cli.side_process import SideProcess
 from mazeslam.core.beams import SensorOverrides
 from mazeslam.core.config import with_settings
-from mazeslam.core.outputs import prepare_output_folder
+from mazeslam.core.outputs import WriteError, prepare_output_folder, staged_outputs
 from mazeslam.data import sidecars
 from mazeslam.data.beam_detection import convention_given, convention_warning, with_detected_convention
 from mazeslam.data.loaded_run import LoadedRun, load_run
@@ -63,7 +63,8 @@ FIGURE_MODULES = (
     "out_dir",
     type=click.Path(file_okay=False, path_type=Path),
     help="Folder for trajectory.csv, map.json, slam.png, occupancy.pgm/.yaml [default: runs/<log name>/slam/ "
-    "under the current directory]; a rerun replaces the files of the last run.",
+    "under the current directory, unless it holds the run of another log of that name]; a run replaces the "
+    "last run's files once all of its own are written (a run that fails leaves them as they were).",
 )
 @click.option("--seed", type=SEED, help="Seed of the filter's random draws [default: from the config, 0].")
 @click.option(
@@ -111,8 +112,10 @@ def slam(
 ):
     """Run FastSLAM on a course log: trajectory, map, the exercise's figure, and errors when truth exists."""
     overrides = geometry_overrides(first_beam_angle, beam_direction, mount_x)
+    given = out_dir is not None
     out_dir = prepare_output_folder(out_dir or default_out_dir(log_file, "slam"))
-    clear_outputs(out_dir, SLAM_FILES)
+    if not given:  # a/run.log and b/run.log both default to runs/run/slam
+        check_same_log(out_dir, log_file, "slam")
     filter_changes = {
         "NPARTICLES": particles,
         "seed": seed,
@@ -150,10 +153,11 @@ def run_slam_command(
     side_process: bool = False,
 ) -> list[str]:
     """Run, write ``out_dir``/{trajectory.csv, best_trajectory.csv, map.json, slam.png, occupancy.pgm/.yaml/.png,
-    landmarks.csv[, slam.gif]};
-    return the lines to print. ``filter_changes`` replace ``[fastslam]`` settings and ``sensor``
-    the ``[sensor]`` ones (None values: keep the config's). ``live``: draw the filter as it runs
-    (``mazeslam.viz.live``; its note when there is no window goes to ``echo`` at once, and to the lines).
+    landmarks.csv[, slam.gif]}, replacing the last run's files (``SLAM_FILES``) once all are written
+    (``staged_outputs``: an error or interrupt leaves them as they were); return the lines to print.
+    ``filter_changes`` replace ``[fastslam]`` settings and ``sensor`` the ``[sensor]`` ones (None
+    values: keep the config's). ``live``: draw the filter as it runs (``mazeslam.viz.live``; its
+    note when there is no window goes to ``echo`` at once, and to the lines).
     ``map_kind`` replaces ``[map] kind``; the particle count and seed go to the filter that runs.
     ``side_process``: corner FastSLAM's ``slam.png`` and map export are made by a ``SideProcess``
     forked before the filter runs, which loads matplotlib meanwhile and draws while this process
@@ -168,15 +172,21 @@ def run_slam_command(
     run = with_detected_convention(run, config, cache_folder=Path(out_dir))
     notes = [note for note in [_given_convention_warning(run, config), _blind_motion_note(run, config)] if note]
     grid = config.map.kind == MapKind.GRID
-    with SideProcess(FIGURE_MODULES, fork=side_process and not grid) as side:
-        return _run_and_write(log_file, run, config, Path(out_dir), notes, animate, progress, live, echo, side)
+    # The side process ends (its drawing stopped) before the staging folder is committed or removed.
+    with (
+        staged_outputs(out_dir, SLAM_FILES) as staging,
+        SideProcess(FIGURE_MODULES, fork=side_process and not grid) as side,
+    ):
+        lines, paths = _run_and_write(log_file, run, config, staging, notes, animate, progress, live, echo, side)
+    return [*lines, "wrote " + ", ".join(str(Path(out_dir) / path.name) for path in paths.values())]
 
 
 def _run_and_write(
     log_file, run: LoadedRun, config: SlamConfig, out_dir: Path, notes: list[str], animate, progress, live, echo, side
-) -> list[str]:
-    """``run_slam_command`` once the settings and the log are read: the filter, its outputs and
-    lines; ``side`` (a ``SideProcess``) draws corner FastSLAM's figure and exports its map."""
+) -> tuple[list[str], dict[str, Path]]:
+    """``run_slam_command`` once the settings and the log are read: the filter, its outputs written
+    into ``out_dir`` (the staging folder) and the lines to print, with the paths written by name;
+    ``side`` (a ``SideProcess``) draws corner FastSLAM's figure and exports its map."""
     grid = config.map.kind == MapKind.GRID
     title = f"{run.path.name}: {config.map.kind.filter_name}, {config.particles} particles"
     updates = int(run.log.is_scan.sum() + (0 if grid else run.log.is_landmark.sum()))
@@ -276,9 +286,14 @@ def _run_and_write(
     else:
         paths.update(side.result())  # slam.png and the map export
     if animate:
-        paths["animation"] = _animate(run, config, result, points, title, truth_label, progress, out_dir)
-    lines.append("wrote " + ", ".join(str(p) for p in paths.values()))
-    return lines
+        try:
+            paths["animation"] = _animate(run, config, result, points, title, truth_label, progress, out_dir)
+        except OSError as error:  # the animation's writer names no file: name the one it writes
+            from mazeslam.viz.slam_view import ffmpeg_path
+
+            name = "slam.mp4" if ffmpeg_path() is not None else "slam.gif"
+            raise WriteError(out_dir / name, error.strerror or str(error)) from error
+    return lines, paths
 
 
 def _animate(run: LoadedRun, config: SlamConfig, result: SlamResult, points, title, truth_label, progress, out_dir):

@@ -26,11 +26,11 @@ import click
 import numpy as np
 
 from mazeslam.cli.options import beam_geometry_options, geometry_overrides
-from mazeslam.cli.run_folders import SMOOTH_FILES, clear_outputs, default_out_dir
+from mazeslam.cli.run_folders import SMOOTH_FILES, check_same_log, default_out_dir
 from mazeslam.core.beams import SensorOverrides
 from mazeslam.core.config import jsonable
 from mazeslam.core.motion import dead_reckoning
-from mazeslam.core.outputs import prepare_output_folder
+from mazeslam.core.outputs import prepare_output_folder, staged_outputs, write_file
 from mazeslam.data import sidecars
 from mazeslam.data.beam_detection import with_detected_convention
 from mazeslam.data.loaded_run import LoadedRun, load_run
@@ -65,7 +65,8 @@ from mazeslam.viz.smooth_figure import plot_smoothed
     "out_dir",
     type=click.Path(file_okay=False, path_type=Path),
     help="Folder for trajectory.csv, map.json, smooth.png [default: runs/<log name>/smooth/ under the "
-    "current directory]; a rerun replaces the files of the last run.",
+    "current directory, unless it holds the run of another log of that name]; a run replaces the last run's "
+    "files once all of its own are written (a run that fails leaves them as they were).",
 )
 @beam_geometry_options
 def smooth(log_file, config_path, association, run_dir, out_dir, first_beam_angle, beam_direction, mount_x):
@@ -74,11 +75,13 @@ def smooth(log_file, config_path, association, run_dir, out_dir, first_beam_angl
     With --association from-run, RUN_DIR is the output folder of `mazeslam slam` on the same log."""
     if (association == "from-run") != (run_dir is not None):
         raise click.UsageError("RUN_DIR goes with --association from-run, and only with it")
+    given = out_dir is not None
     out_dir = out_dir or default_out_dir(log_file, "smooth")
     if run_dir is not None and out_dir.resolve() == run_dir.resolve():
         raise click.UsageError("--out is RUN_DIR: the smoother would replace the run it reads; give another folder")
     out_dir = prepare_output_folder(out_dir)
-    clear_outputs(out_dir, SMOOTH_FILES)
+    if not given:  # a/run.log and b/run.log both default to runs/run/smooth
+        check_same_log(out_dir, log_file, "smooth")
     overrides = geometry_overrides(first_beam_angle, beam_direction, mount_x)
     click.echo("\n".join(run_smooth_command(log_file, config_path, out_dir, association, run_dir, overrides)))
     click.echo(f"results in {out_dir}")
@@ -87,8 +90,9 @@ def smooth(log_file, config_path, association, run_dir, out_dir, first_beam_angl
 def run_smooth_command(
     log_file, config_path, out_dir, association: str = "known", run_dir=None, sensor: SensorOverrides | None = None
 ) -> list[str]:
-    """Smooth, write ``out_dir``/{trajectory.csv, trajectory.tum, map.json, smooth.png}; return the
-    lines to print. ``association``: "known" (the truth's corners) or "from-run" (``run_dir``'s map)."""
+    """Smooth, write ``out_dir``/{trajectory.csv, trajectory.tum, map.json, smooth.png} (replacing the
+    last run's files once all are written: ``staged_outputs``); return the lines to print.
+    ``association``: "known" (the truth's corners) or "from-run" (``run_dir``'s map)."""
     config = load_slam_config(config_path)
     config = dataclasses.replace(config, sensor=(sensor or SensorOverrides()).over(config.sensor))
     run = load_run(log_file, config.sensor)
@@ -140,8 +144,9 @@ def run_smooth_command(
         lines += error_lines
     else:
         lines.append("no ground truth beside the log: no errors to report")
-    paths = _write_outputs(Path(out_dir), run, config, smoothed, document)
-    lines.append("wrote " + ", ".join(str(p) for p in paths.values()))
+    with staged_outputs(out_dir, SMOOTH_FILES) as staging:
+        paths = _write_outputs(staging, run, config, smoothed, document)
+    lines.append("wrote " + ", ".join(str(Path(out_dir) / path.name) for path in paths.values()))
     return lines
 
 
@@ -187,7 +192,7 @@ def _write_outputs(out_dir: Path, run: LoadedRun, config: SlamConfig, smoothed: 
     paths = {"trajectory": out_dir / "trajectory.csv", "tum": out_dir / "trajectory.tum", "map": out_dir / "map.json"}
     sidecars.write_trajectory(paths["trajectory"], run.log.times, smoothed.poses, smoothed.covariances)
     sidecars.write_tum(paths["tum"], run.log.times, smoothed.poses)
-    paths["map"].write_text(json.dumps(jsonable(document), indent=1, allow_nan=False) + "\n")
+    write_file(paths["map"], json.dumps(jsonable(document), indent=1, allow_nan=False) + "\n")
     points = scan_points_world(
         run.log, smoothed.poses, run.geometry, config.corners.min_range, config.corners.max_range
     )

@@ -16,6 +16,7 @@ from pathlib import Path
 import numpy as np
 
 from mazeslam.core.beams import BeamGeometry
+from mazeslam.core.outputs import write_file
 from mazeslam.data import log
 from mazeslam.data.map_io import FREE, OCCUPIED, UNKNOWN, OccupancyMap, write_map
 
@@ -108,8 +109,7 @@ def write_landmarks(path: str | Path, landmarks: np.ndarray, covariances: np.nda
         f"{x:.6f},{y:.6f},{c[0, 0]:.9g},{c[0, 1]:.9g},{c[1, 1]:.9g}"
         for (x, y), c in zip(np.asarray(landmarks).reshape(-1, 2), np.asarray(covariances).reshape(-1, 2, 2))
     ]
-    path.write_text("\n".join(rows) + "\n")
-    return path
+    return write_file(path, "\n".join(rows) + "\n")
 
 
 def export_map(

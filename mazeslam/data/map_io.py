@@ -17,6 +17,8 @@ from pathlib import Path
 import numpy as np
 import yaml
 
+from mazeslam.core.outputs import write_file, written
+
 #: Cell states, as nav_msgs/OccupancyGrid: unknown, free, occupied.
 UNKNOWN, FREE, OCCUPIED = -1, 0, 100
 _PIXEL = {OCCUPIED: 0, FREE: 254, UNKNOWN: 205}
@@ -52,15 +54,17 @@ def write_map(
     occupied_thresh: float = 0.65,
     free_thresh: float = 0.196,
 ) -> Path:
-    """Write ``name.pgm``, ``name.yaml`` and ``name.png`` into ``folder``; returns the YAML's path."""
+    """Write ``name.pgm``, ``name.yaml`` and ``name.png`` into ``folder``, each whole or not at all
+    (``mazeslam.core.outputs.written``); returns the YAML's path."""
     folder = Path(folder)
     folder.mkdir(parents=True, exist_ok=True)
     image = to_image(occupancy.states)
     height, width = image.shape
-    (folder / f"{name}.pgm").write_bytes(f"P5\n{width} {height}\n255\n".encode() + image.tobytes())
+    write_file(folder / f"{name}.pgm", f"P5\n{width} {height}\n255\n".encode() + image.tobytes())
     from matplotlib import image as images  # matplotlib writes the figures anyway; OpenCV is slow to load
 
-    images.imsave(folder / f"{name}.png", image, cmap="gray", vmin=0, vmax=255)
+    with written(folder / f"{name}.png") as temporary:
+        images.imsave(temporary, image, cmap="gray", vmin=0, vmax=255)
     description = {
         "image": f"{name}.pgm",
         "resolution": float(occupancy.resolution),
@@ -69,9 +73,7 @@ def write_map(
         "occupied_thresh": occupied_thresh,
         "free_thresh": free_thresh,
     }
-    path = folder / f"{name}.yaml"
-    path.write_text(yaml.safe_dump(description, sort_keys=False))
-    return path
+    return write_file(folder / f"{name}.yaml", yaml.safe_dump(description, sort_keys=False))
 
 
 def read_map(yaml_path: str | Path) -> OccupancyMap:

@@ -24,6 +24,7 @@ import numpy as np
 
 from mazeslam.core.beams import BeamGeometry
 from mazeslam.core.config import InputError, jsonable, read_text
+from mazeslam.core.outputs import write_file, written
 
 TRUTH_HEADER = "t,x,y,theta"
 MAP_FORMAT = "mazeslam-map"
@@ -45,11 +46,13 @@ def map_path(log_path: str | Path) -> Path:
 
 
 def write_truth(path: str | Path, times: np.ndarray, poses: np.ndarray) -> None:
-    """Write ``times`` (R,) seconds and ``poses`` (R, 3) ``x, y, theta`` as a truth CSV."""
+    """Write ``times`` (R,) seconds and ``poses`` (R, 3) ``x, y, theta`` as a truth CSV (whole or
+    not at all, as every writer here: ``mazeslam.core.outputs.written``)."""
     table = np.column_stack([np.asarray(times, dtype=float), np.asarray(poses, dtype=float)])
     if table.ndim != 2 or table.shape[1] != 4:
         raise ValueError(f"truth needs times (R,) and poses (R, 3), got a table shaped {table.shape}")
-    np.savetxt(path, table, fmt="%.6f", delimiter=",", header=TRUTH_HEADER, comments="")
+    with written(path) as temporary:
+        np.savetxt(temporary, table, fmt="%.6f", delimiter=",", header=TRUTH_HEADER, comments="")
 
 
 class TruthWriter:
@@ -117,7 +120,10 @@ def write_trajectory(path: str | Path, times: np.ndarray, poses: np.ndarray, cov
     (R, 3, 3), one row per record under ``TRAJECTORY_HEADER``."""
     upper = np.asarray(covariances, dtype=float)[:, _UPPER[0], _UPPER[1]]
     table = np.column_stack([np.asarray(times, dtype=float), np.asarray(poses, dtype=float), upper])
-    np.savetxt(path, table, fmt=["%.6f"] * 4 + ["%.9g"] * 6, delimiter=",", header=TRAJECTORY_HEADER, comments="")
+    with written(path) as temporary:
+        np.savetxt(
+            temporary, table, fmt=["%.6f"] * 4 + ["%.9g"] * 6, delimiter=",", header=TRAJECTORY_HEADER, comments=""
+        )
 
 
 def read_trajectory(path: str | Path) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -137,7 +143,8 @@ def write_tum(path: str | Path, times: np.ndarray, poses: np.ndarray) -> None:
     half = 0.5 * poses[:, 2]
     zeros = np.zeros(len(poses))
     table = np.column_stack([times, poses[:, 0], poses[:, 1], zeros, zeros, zeros, np.sin(half), np.cos(half)])
-    np.savetxt(path, table, fmt="%.9f")
+    with written(path) as temporary:
+        np.savetxt(temporary, table, fmt="%.9f")
 
 
 def write_map(path: str | Path, walls, corners, sensor: dict, **extra) -> None:
@@ -153,7 +160,7 @@ def write_map(path: str | Path, walls, corners, sensor: dict, **extra) -> None:
     text = json.dumps(jsonable(document), indent=1, allow_nan=False)
     # One line per innermost list (a wall, a corner) keeps the file short and readable.
     text = re.sub(r"\[([^\[\]{}\"]*)\]", lambda m: "[" + " ".join(m.group(1).split()) + "]", text)
-    Path(path).write_text(text + "\n")
+    write_file(path, text + "\n")
 
 
 def read_map(path: str | Path) -> dict:

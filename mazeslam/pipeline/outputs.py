@@ -17,6 +17,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from mazeslam.core.config import jsonable
+from mazeslam.core.outputs import write_file
 from mazeslam.data import sidecars
 
 if TYPE_CHECKING:
@@ -51,7 +52,8 @@ def write_outputs(out_dir, result: SlamResult, extra: dict) -> dict[str, Path]:
     the same as ``trajectory.tum`` (for evo), ``best_trajectory.csv`` (the best particle's path),
     for a grid ``occupancy.pgm/.yaml/.png`` (the best particle's map), and ``map.json``: the run's
     facts, the landmarks with their covariances (for a grid, its size and memory), and ``extra``
-    (strict JSON). Returns the paths by name."""
+    (strict JSON). Each file is written whole or not at all (``mazeslam.core.outputs.written``: a
+    ``WriteError`` names the file that could not be written). Returns the paths by name."""
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
     paths = {
@@ -89,5 +91,5 @@ def write_outputs(out_dir, result: SlamResult, extra: dict) -> dict[str, Path]:
             landmarks=result.landmarks.round(6).tolist(), landmark_covariances=result.landmark_covariances.tolist()
         )
     document.update(extra)
-    paths["map"].write_text(json.dumps(jsonable(document), indent=1, allow_nan=False) + "\n")
+    write_file(paths["map"], json.dumps(jsonable(document), indent=1, allow_nan=False) + "\n")
     return paths

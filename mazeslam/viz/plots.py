@@ -17,6 +17,8 @@ matplotlib.use("Agg")  # draw to files; no display needed (pyplot itself loads o
 import numpy as np  # noqa: E402
 from matplotlib.collections import EllipseCollection, LineCollection  # noqa: E402
 
+from mazeslam.core.outputs import written  # noqa: E402
+
 
 def plot_run(
     path: str | Path,
@@ -93,8 +95,9 @@ def draw_ellipses(
 
 def save_figure(fig, ax, path: str | Path, title: str = "", legend_columns: int = 4, dpi: int = 120) -> Path:
     """Title ``ax``, put its legend below the plot, lay ``fig`` out (constrained layout, so neither
-    the legend nor an axis label is cut off), save it to ``path`` (folders made) and close it (a
-    pyplot figure; one made as ``matplotlib.figure.Figure`` is not pyplot's to close)."""
+    the legend nor an axis label is cut off), save it to ``path`` (folders made; whole or not at
+    all, ``mazeslam.core.outputs.written``) and close it, saved or not (a pyplot figure; one made as
+    ``matplotlib.figure.Figure`` is not pyplot's to close)."""
     ax.set_title(title)
     fig.set_layout_engine("constrained")
     handles, labels = ax.get_legend_handles_labels()
@@ -102,8 +105,11 @@ def save_figure(fig, ax, path: str | Path, title: str = "", legend_columns: int 
         fig.legend(handles, labels, loc="outside lower center", ncol=min(legend_columns, len(handles)), fontsize=8)
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path, dpi=dpi)
-    pyplot = sys.modules.get("matplotlib.pyplot")
-    if pyplot is not None:
-        pyplot.close(fig)
+    try:
+        with written(path) as temporary:
+            fig.savefig(temporary, dpi=dpi)
+    finally:
+        pyplot = sys.modules.get("matplotlib.pyplot")
+        if pyplot is not None:
+            pyplot.close(fig)
     return path
