@@ -28,6 +28,7 @@ import numpy as np
 
 from mazeslam.core.beams import BeamGeometry, SensorOverrides
 from mazeslam.core.geometry import advance_pose, compose, relative, wrap_angle
+from mazeslam.core.outputs import write_file
 from mazeslam.data import log
 from mazeslam.data.loaded_run import LoadedRun
 
@@ -304,7 +305,7 @@ def detected_geometry(
             found = {"error": str(error)}
         if cache is not None:
             cache.parent.mkdir(parents=True, exist_ok=True)
-            cache.write_text(json.dumps({**key, **found}, indent=1) + "\n")
+            write_file(cache, json.dumps({**key, **found}, indent=1) + "\n")
     if "error" in found or found["margin"] < CONCLUSIVE_MARGIN:
         reason = found.get("error") or f"margin x{found['margin']:.2f} under x{CONCLUSIVE_MARGIN}"
         return run.geometry, f"{run.geometry_origin} (beam convention detection inconclusive: {reason})"

@@ -19,6 +19,7 @@ from matplotlib.collections import EllipseCollection, LineCollection
 from matplotlib.patches import Ellipse
 
 from mazeslam.core.geometry import transform_points
+from mazeslam.core.outputs import written
 from mazeslam.viz.plots import draw_ellipses
 
 #: ``scan_at(record index) -> (scan points (K, 2), corners (C, 2))`` in the world frame.
@@ -175,7 +176,16 @@ def save_animation(
     animation = FuncAnimation(view.figure, lambda frame: view.show(*frame), frames=frames, cache_frame_data=False)
     bar = tqdm(total=len(frames), desc=f"drawing {path.name}", unit="frame", disable=not progress)
     path.parent.mkdir(parents=True, exist_ok=True)
-    animation.save(path, writer=writer, dpi=100, progress_callback=lambda done, total: bar.update(1))
-    bar.close()
+    try:
+        with written(path) as partial:
+            animation.save(partial, writer=writer, dpi=100, progress_callback=lambda done, total: bar.update(1))
+    except Exception as error:
+        # Interrupted before its first frame, matplotlib's writer still finishes, and Pillow's fails
+        # with an IndexError that would hide the interrupt: raise the interrupt itself.
+        if isinstance(error.__context__, (KeyboardInterrupt, SystemExit)):
+            raise error.__context__ from None
+        raise
+    finally:
+        bar.close()
     plt.close(view.figure)
     return path
