@@ -50,13 +50,15 @@ FIGURE_MODULES = (
 @click.option(
     "--particles",
     type=PARTICLES,
-    help="Particle count of the filter that runs [default: from the config; 100 without one].",
+    help="Particle count of the filter that runs [default: from the config; without one 100 for corner FastSLAM, "
+    "30 for the grid filter].",
 )
 @click.option(
     "--config",
     "config_path",
     type=click.Path(exists=True, dir_okay=False, path_type=Path),
-    help="FastSLAM TOML with [fastslam], [corners], [sensor] (see configs/fastslam.toml).",
+    help="Slam TOML: [map] kind and the filter's settings, [fastslam] or [grid], with [corners], [sensor], "
+    "[odometry], [scan_matching] (configs/fastslam.toml, configs/course.toml, configs/carmen.toml).",
 )
 @click.option(
     "--out",
@@ -110,7 +112,9 @@ def slam(
     mount_x,
     quiet,
 ):
-    """Run FastSLAM on a course log: trajectory, map, the exercise's figure, and errors when truth exists."""
+    """Run SLAM on a course log: trajectory, map, figure, and errors when truth exists.
+
+    The filter is the one the config's [map] kind names: corner FastSLAM or the grid filter."""
     overrides = geometry_overrides(first_beam_angle, beam_direction, mount_x)
     given = out_dir is not None
     out_dir = prepare_output_folder(out_dir or default_out_dir(log_file, "slam"))
@@ -217,7 +221,7 @@ def _run_and_write(
             config.corners.max_range,
         )
     )
-    truth_label = "reference path" if run.truth_is_reference else "true path"
+    truth_label = run.truth_path_label
     points = None
     if not grid:
         points = scan_points_world(run.log, result.mean_poses, run.geometry, *span)

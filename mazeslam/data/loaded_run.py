@@ -76,6 +76,11 @@ class LoadedRun:
     def truth_is_reference(self) -> bool:
         return self.truth_label.startswith("reference")
 
+    @property
+    def truth_path_label(self) -> str:
+        """How a figure's legend names the truth's path: "reference path" or "true path"."""
+        return "reference path" if self.truth_is_reference else "true path"
+
     def glitches(self, jump_tolerance: float) -> np.ndarray:
         """Record indices (G,) of the odometry records travelling more than ``jump_tolerance``
         metres in one step (the exercise's TOL_JMP): glitches, left out of the motion."""

@@ -183,8 +183,7 @@ class GridLiveView(FilterView):
         self.low, self.high = start.copy(), start.copy()
         if run.truth is not None:
             self.low, self.high = run.truth[:, :2].min(axis=0), run.truth[:, :2].max(axis=0)
-        truth_label = "reference path" if run.truth_is_reference else "true path"
-        self.view = GridView(self.low, self.high, title, truth_label)
+        self.view = GridView(self.low, self.high, title, run.truth_path_label)
 
     def mean_pose(self, slam) -> np.ndarray:
         return slam.cloud(np.zeros(3))[1]

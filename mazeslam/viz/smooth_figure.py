@@ -28,7 +28,7 @@ def plot_smoothed(path, run: LoadedRun, smoothed: Smoothed, points: np.ndarray) 
         "batch optimum": (smoothed.poses, "tab:blue"),
     }
     if run.truth is not None:
-        paths["reference path" if run.truth_is_reference else "true path"] = (run.truth, "tab:green")
+        paths[run.truth_path_label] = (run.truth, "tab:green")
     for label, (poses, colour) in paths.items():
         ax.plot(poses[:, 0], poses[:, 1], color=colour, linewidth=1.2, label=label)
     if len(run.true_corners):

@@ -35,7 +35,7 @@ def building(tmp_path_factory):
     return simulated, config
 
 
-def test_the_grid_command_writes_a_map_server_map_and_closes_the_loop(building, tmp_path):
+def test_slam_with_the_grid_filter_writes_a_map_server_map_and_closes_the_loop(building, tmp_path):
     simulated, config = building
     out = tmp_path / "out"
     result = CliRunner().invoke(
