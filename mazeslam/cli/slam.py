@@ -14,21 +14,17 @@ from mazeslam.cli.run_folders import SLAM_FILES, check_same_log, default_out_dir
 from mazeslam.cli.side_process import SideProcess
 from mazeslam.core.beams import SensorOverrides
 from mazeslam.core.config import with_settings
-from mazeslam.core.outputs import WriteError, prepare_output_folder, staged_outputs
-from mazeslam.data import sidecars
+from mazeslam.core.outputs import prepare_output_folder, staged_outputs
 from mazeslam.data.beam_detection import convention_given, convention_warning, with_detected_convention
 from mazeslam.data.loaded_run import LoadedRun, load_run
-from mazeslam.data.scans import scan_points_world
 from mazeslam.evaluation.consistency import EXPLANATION, MOTION_EXPLANATION, POSE_BOUND_95, summarise
 from mazeslam.evaluation.scoring import RPE_DISTANCE, score_run
 from mazeslam.evaluation.sharpness import paths_sharpness, sharpness_lines
-from mazeslam.features.corners import CornerExtractor
 from mazeslam.gridslam.filter import SearchMode
-from mazeslam.gridslam.occupancy import grid_states
 from mazeslam.pipeline import MapKind, SlamConfig, SlamResult, load_slam_config, run_slam
-from mazeslam.pipeline.outputs import consistency, write_outputs
+from mazeslam.pipeline.outputs import consistency
 from mazeslam.smoothing.optimum import optimum_columns, optimum_line
-from mazeslam.viz.slam_figure import SlamFigure, animate_slam, draw_and_export
+from mazeslam.viz.run_files import figure_title, landmark_figure_call, trusted_span, write_run
 
 if TYPE_CHECKING:
     from mazeslam.viz.live import GridLiveView, LiveView
@@ -192,7 +188,7 @@ def _run_and_write(
     into ``out_dir`` (the staging folder) and the lines to print, with the paths written by name;
     ``side`` (a ``SideProcess``) draws corner FastSLAM's figure and exports its map."""
     grid = config.map.kind == MapKind.GRID
-    title = f"{run.path.name}: {config.map.kind.filter_name}, {config.particles} particles"
+    title = figure_title(run, config)
     updates = int(run.log.is_scan.sum() + (0 if grid else run.log.is_landmark.sum()))
     every = max(1, updates // ANIMATION_FRAMES) if animate else 0  # at most ~ANIMATION_FRAMES frames
     view: LiveView | GridLiveView | None = None
@@ -213,28 +209,10 @@ def _run_and_write(
             f"Live view: {view.frames} frames drawn in {view.drawing_seconds:.1f} s"
             + ("" if view.window else " (off-screen: no display)")
         )
-    span = (
-        (config.grid.grid.min_range, config.grid.grid.max_range)
-        if grid
-        else (
-            config.corners.min_range,
-            config.corners.max_range,
-        )
-    )
-    truth_label = run.truth_path_label
-    points = None
-    if not grid:
-        points = scan_points_world(run.log, result.mean_poses, run.geometry, *span)
-        figure = SlamFigure.of(
-            result,
-            points,
-            truth=run.truth,
-            walls=run.walls,
-            true_landmarks=run.true_corners if run.world is not None else None,
-            title=title,
-            truth_label=truth_label,
-        )
-        side.start(draw_and_export, out_dir, figure, run.log, run.geometry, *span)
+    span = trusted_span(config)
+    if not grid:  # drawn by the side process while this one scores the run
+        function, arguments = landmark_figure_call(out_dir, run, config, result)
+        side.start(function, *arguments)
     score = score_run(run, result, config.evaluation.match_radius)
     nis = result.nis_summary()
     nis_by_kind = {kind: summarise(values, result.nis_bound) for kind, values in sorted(result.nis_by_kind().items())}
@@ -269,67 +247,9 @@ def _run_and_write(
             extra["optimum"] = optimum
     else:
         lines.append("no ground truth beside the log: no errors to report")
-    paths = write_outputs(out_dir, result, extra)
-    if run.truth is not None:
-        paths["truth_tum"] = out_dir / "truth.tum"
-        sidecars.write_tum(paths["truth_tum"], run.log.times, run.truth)
-    if grid:
-        from mazeslam.viz.grid_figure import plot_grid_run
-
-        assert result.grid is not None
-        paths["figure"] = plot_grid_run(
-            out_dir / "slam.png",
-            grid_states(result.grid),
-            result.mean_poses,
-            result.best_poses,
-            result.filter.poses,
-            title,
-            run.truth,
-            truth_label,
-        )
-    else:
-        paths.update(side.result())  # slam.png and the map export
-    if animate:
-        try:
-            paths["animation"] = _animate(run, config, result, points, title, truth_label, progress, out_dir)
-        except OSError as error:  # the animation's writer names no file: name the one it writes
-            from mazeslam.viz.slam_view import ffmpeg_path
-
-            name = "slam.mp4" if ffmpeg_path() is not None else "slam.gif"
-            raise WriteError(out_dir / name, error.strerror or str(error)) from error
+    drawn = None if grid else side.result()  # slam.png and the map export
+    paths = write_run(out_dir, run, config, result, extra, animate, progress, drawn)
     return lines, paths
-
-
-def _animate(run: LoadedRun, config: SlamConfig, result: SlamResult, points, title, truth_label, progress, out_dir):
-    """The run as an animation (``slam.mp4`` with ffmpeg, else ``slam.gif``): corner FastSLAM's
-    particles, landmarks and scans (``animate_slam``), or the grid filter's map growing (``animate_grid``)."""
-    if result.grid is not None:
-        from mazeslam.viz.grid_animation import animate_grid
-
-        records = result.estimated_records
-        return animate_grid(
-            out_dir / "slam.gif",
-            result.snapshots,
-            result.mean_poses[records],
-            title,
-            run.truth[records] if run.truth is not None else None,
-            truth_label,
-            progress=progress,
-        )
-    from mazeslam.viz.slam_view import scan_source
-
-    extractor = CornerExtractor(run.geometry, run.log.width, config.corners)
-    return animate_slam(
-        out_dir / "slam.gif",
-        result,
-        points,
-        run.truth,
-        run.walls,
-        scan_at=scan_source(run.log, result.mean_poses, run.geometry, extractor) if run.log.n_beams else None,
-        title=title,
-        progress=progress,
-        truth_label=truth_label,
-    )
 
 
 def _run_lines(
