@@ -172,6 +172,11 @@ def run_slam_command(
     run = with_detected_convention(run, config, cache_folder=Path(out_dir))
     notes = [note for note in [_given_convention_warning(run, config), _blind_motion_note(run, config)] if note]
     grid = config.map.kind == MapKind.GRID
+    unused = [f"--{name}" for name in ("association", "version") if filter_changes.get(name) is not None]
+    if grid and unused:
+        notes.append(
+            f"note: {' and '.join(unused)} set corner FastSLAM's [fastslam]; the grid filter runs ([map] kind)"
+        )
     # The side process ends (its drawing stopped) before the staging folder is committed or removed.
     with (
         staged_outputs(out_dir, SLAM_FILES) as staging,

@@ -104,3 +104,11 @@ def test_the_python_api_runs_the_filter_the_config_names(building):
     np.testing.assert_array_equal(result.estimated_records, np.flatnonzero(log.read(simulated.path).is_scan))
     corners = slam_on_file(simulated.path, load_slam_config(PROJECT_ROOT / "configs" / "fastslam.toml"), progress=False)
     assert corners.kind == MapKind.LANDMARKS and corners.grid is None and len(corners.landmarks) > 0
+
+
+def test_corner_fastslam_options_under_the_grid_filter_are_said_to_do_nothing(building, tmp_path):
+    simulated, config = building
+    options = ["slam", str(simulated.path), "--config", str(config), "--quiet", "--particles", "2", "--version", "1"]
+    result = CliRunner().invoke(main, [*options, "--out", str(tmp_path)])
+    assert result.exit_code == 0, result.output
+    assert "--version set corner FastSLAM's [fastslam]; the grid filter runs" in result.output
