@@ -32,7 +32,7 @@ import numpy as np
 from mazeslam.core.beams import BeamGeometry
 from mazeslam.core.config import read_text
 from mazeslam.core.limits import MAX_BEAMS
-from mazeslam.data.log import MAX_TIME, MAX_VALUE, LogFormatError
+from mazeslam.data.log import BYTE_ORDER_MARK, MAX_TIME, MAX_VALUE, LogFormatError
 
 
 @dataclass
@@ -107,8 +107,9 @@ def front_laser(n_beams: int) -> BeamGeometry:
 
 
 def _lines(path: Path) -> list[str]:
-    """The lines of a plain or gzipped text file (read errors as one ``InputError`` naming it)."""
-    return read_text(path, "CARMEN log").splitlines()
+    """The lines of a plain or gzipped text file (read errors as one ``InputError`` naming it), a
+    UTF-8 byte order mark before the first dropped."""
+    return read_text(path, "CARMEN log").removeprefix(BYTE_ORDER_MARK).splitlines()
 
 
 def _numbers(texts: list[str], what: str) -> list[float]:
@@ -268,8 +269,9 @@ def import_carmen(path: str | Path, out: str | Path) -> dict:
     """
     from mazeslam.core.geometry import relative
     from mazeslam.data import sidecars
-    from mazeslam.data.log import LogWriter
+    from mazeslam.data.log import LogWriter, refuse_to_overwrite
 
+    refuse_to_overwrite([path], [out, sidecars.truth_path(out), sidecars.map_path(out)])
     carmen = read_carmen(path)
     max_range = carmen.max_range
     out = Path(out)

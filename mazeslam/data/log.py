@@ -11,8 +11,12 @@ One record a line, values separated by whitespace or commas::
                                             bearing (rad) in the robot frame
 
 Every line of a log has the same number of values (N + 2, and at least 5 in a log with landmark
-observations). Blank lines and lines starting with
-``#`` or ``%`` are comments. Timestamps (seconds) never decrease. mazeslam writes values separated
+observations). A log holds scans or landmark observations, not both: no filter, smoother or
+calibration weighs the two together (a scan's corners carry their own covariance, a landmark record
+none; known association names a scan's corners by the truth's map, a landmark record by its own id),
+so a record of the other kind is a bad line. Blank lines and lines starting with
+``#`` or ``%`` are comments; a UTF-8 byte order mark before the first line is dropped (editors on
+Windows write one). Timestamps (seconds) never decrease. mazeslam writes values separated
 by single spaces with 6 decimals, like the exercise's logger, so a log written and read back gives
 the same numbers to 1e-6.
 
@@ -24,6 +28,7 @@ from __future__ import annotations
 import dataclasses
 import io
 import math
+import os
 from collections import Counter
 from collections.abc import Iterator
 from dataclasses import dataclass, field
@@ -45,6 +50,8 @@ _COMMENT_PREFIXES = ("#", "%")
 #: (odometry travel, poses) would overflow.
 MAX_TIME = 1e13
 MAX_VALUE = 1e9
+#: The UTF-8 byte order mark as decoded text; dropped before a log's first line.
+BYTE_ORDER_MARK = "\ufeff"
 
 
 class LogFormatError(ValueError):
@@ -185,7 +192,7 @@ def parse(text: str, source: str = "<text>", strict: bool = True) -> CourseLog:
     The numbers are converted all at once (numpy's C parser) and checked as arrays; only a log
     with a bad line is then read line by line, to name the first bad line and why (strict) or to
     leave the bad lines out (lenient)."""
-    lines = text.splitlines()
+    lines = text.removeprefix(BYTE_ORDER_MARK).splitlines()
     numbers = [
         number
         for number, line in enumerate(lines, start=1)
@@ -198,12 +205,45 @@ def parse(text: str, source: str = "<text>", strict: bool = True) -> CourseLog:
         return _parse_line_by_line(
             [(number, lines[number - 1].replace(",", " ").split()) for number in numbers], source, strict
         )
-    return CourseLog(
+    course_log = CourseLog(
         times=table[:, 0],
         flags=table[:, 1].astype(np.int8),
         values=table[:, 2:],
         source=source,
         line_numbers=np.array(numbers),
+    )
+    return _of_one_kind(course_log, strict)
+
+
+def _of_one_kind(course_log: CourseLog, strict: bool) -> CourseLog:
+    """``course_log`` if it holds scans or landmark observations but not both; else, strict, a
+    ``LogFormatError`` at the first record of the fewer kind (of a tie, the kind that comes later),
+    or, lenient, the log without that kind's records (listed in ``skipped``)."""
+    scans, landmarks = np.flatnonzero(course_log.is_scan), np.flatnonzero(course_log.is_landmark)
+    if not len(scans) or not len(landmarks):
+        return course_log
+    stray_is_landmark = len(landmarks) < len(scans) or (len(landmarks) == len(scans) and landmarks[0] > scans[0])
+    stray = landmarks if stray_is_landmark else scans
+    lines = course_log.line_numbers if course_log.line_numbers is not None else np.arange(len(course_log)) + 1
+    reason = (
+        f"a {'landmark observation (flag 2)' if stray_is_landmark else 'scan (flag 1)'} in a log of "
+        f"{len(scans) if stray_is_landmark else len(landmarks)} "
+        f"{'scans' if stray_is_landmark else 'landmark observations'} ({len(stray)} such line"
+        f"{'s' if len(stray) > 1 else ''}): a log holds "
+        "scans or landmark observations, not both"
+    )
+    if strict:
+        raise LogFormatError(course_log.source, int(lines[stray[0]]), reason)
+    keep = np.ones(len(course_log), dtype=bool)
+    keep[stray] = False
+    skipped = sorted([*course_log.skipped, *(SkippedLine(int(lines[i]), reason) for i in stray)], key=lambda s: s.line)
+    return dataclasses.replace(
+        course_log,
+        times=course_log.times[keep],
+        flags=course_log.flags[keep],
+        values=course_log.values[keep],
+        line_numbers=lines[keep],
+        skipped=skipped,
     )
 
 
@@ -260,7 +300,7 @@ def _parse_line_by_line(rows: list[tuple[int, list[str]]], source: str, strict: 
     if not accepted:
         raise LogFormatError(source, rows[0][0], "no valid record in the log")
     table = np.array([values for _, values in accepted], dtype=float)
-    return CourseLog(
+    course_log = CourseLog(
         times=table[:, 0],
         flags=table[:, 1].astype(np.int8),
         values=table[:, 2:],
@@ -268,6 +308,7 @@ def _parse_line_by_line(rows: list[tuple[int, list[str]]], source: str, strict: 
         line_numbers=np.array([number for number, _ in accepted]),
         skipped=skipped,
     )
+    return _of_one_kind(course_log, strict)
 
 
 def _check_line(parts: list[str], width: int, previous_time: float, first_line: int):
@@ -386,6 +427,24 @@ class LogWriter:
         self.previous_time = t
         self._file.write(line + "\n")
         self._file.flush()
+
+
+def refuse_to_overwrite(inputs, outputs) -> None:
+    """Raise ``ValueError`` if any of the files ``outputs`` (an import's log and sidecars) is one of
+    the files ``inputs`` it reads (the same path, or the same file by another path or link), or
+    would take the place of one that does not exist (a dataset's ``name.dat`` beside the
+    ``name.dat.gz`` it reads): writing it would destroy or replace the input."""
+    for output in map(Path, outputs):
+        for source in map(Path, inputs):
+            same = output.resolve() == source.resolve() or (
+                output.is_file() and source.is_file() and os.path.samefile(output, source)
+            )
+            if same:
+                named = "" if source == output else f" {source}"
+                raise ValueError(
+                    f"{output}: is the input file{named}: writing there would overwrite or replace it; "
+                    "give another output"
+                )
 
 
 def write(path: str | Path, log: CourseLog) -> None:

@@ -9,10 +9,13 @@ Inputs (``.dat`` or ``.dat.gz`` in the dataset folder, '#' comments):
 
 Output, beside ``out``: the course log (odometry records and landmark observation records, flag
 2, with the landmark's subject number as its identity), ``*.truth.csv`` (Vicon pose interpolated
-at every record) and ``*.map.json`` (``corners``: the surveyed landmarks; ``landmark_ids``; no
-walls). Each velocity sample holds until the next; an odometry record is written at every
-odometry sample and right before every measurement, integrating the velocities exactly up to it.
+at every record; a record outside the Vicon's time span gets the pose at its nearer end and is
+counted, and truth that does not overlap the odometry at all is refused) and ``*.map.json``
+(``corners``: the surveyed landmarks; ``landmark_ids``; no walls). Each velocity sample holds until
+the next; an odometry record is written at every odometry sample and right before every
+measurement, integrating the velocities exactly up to it.
 Measurements of other robots (subjects 1-5) and of unknown barcodes are left out and counted.
+An output that is one of the input files is refused before anything is read.
 """
 
 from __future__ import annotations
@@ -25,37 +28,46 @@ import numpy as np
 from mazeslam.core.config import read_text
 from mazeslam.core.geometry import wrap_angle
 from mazeslam.data import sidecars
-from mazeslam.data.log import MAX_TIME, LogWriter
+from mazeslam.data.log import BYTE_ORDER_MARK, MAX_TIME, LogWriter, refuse_to_overwrite
 
 ROBOT_SUBJECTS = range(1, 6)
 
 
+def _found(folder: Path, name: str) -> Path | None:
+    """The file ``name`` or ``name.gz`` in ``folder`` (the plain one first), or None."""
+    return next((candidate for candidate in (folder / name, folder / f"{name}.gz") if candidate.exists()), None)
+
+
 def _table(folder: Path, name: str, columns: int) -> np.ndarray:
-    for candidate in (folder / name, folder / f"{name}.gz"):
-        if candidate.exists():
-            text = read_text(candidate, "MRCLAM table")
-            try:
-                table = np.loadtxt(text.splitlines(), comments="#", ndmin=2)
-            except ValueError as error:
-                raise ValueError(f"{candidate}: {str(error)[:200]}") from error
-            if table.shape[1] != columns:
-                raise ValueError(f"{candidate}: expected {columns} columns, found {table.shape[1]}")
-            if not np.all(np.isfinite(table)) or np.abs(table).max(initial=0) > MAX_TIME:
-                raise ValueError(f"{candidate}: holds a value that is not a finite number of sane size")
-            return table
-    raise FileNotFoundError(f"{folder}: neither {name} nor {name}.gz found")
+    candidate = _found(folder, name)
+    if candidate is None:
+        raise FileNotFoundError(f"{folder}: neither {name} nor {name}.gz found")
+    text = read_text(candidate, "MRCLAM table").removeprefix(BYTE_ORDER_MARK)
+    try:
+        table = np.loadtxt(text.splitlines(), comments="#", ndmin=2)
+    except ValueError as error:
+        raise ValueError(f"{candidate}: {str(error)[:200]}") from error
+    if table.shape[1] != columns:
+        raise ValueError(f"{candidate}: expected {columns} columns, found {table.shape[1]}")
+    if not np.all(np.isfinite(table)) or np.abs(table).max(initial=0) > MAX_TIME:
+        raise ValueError(f"{candidate}: holds a value that is not a finite number of sane size")
+    return table
 
 
 def import_mrclam(folder: str | Path, robot: int, out: str | Path) -> dict:
     """Write robot ``robot``'s log, truth and map sidecars to ``out``; return counts of what was written."""
-    folder = Path(folder)
+    folder, out = Path(folder), Path(out)
     if robot not in ROBOT_SUBJECTS:
         raise ValueError(f"MRCLAM robots are numbered 1 to 5, got {robot}")
-    odometry = _table(folder, f"Robot{robot}_Odometry.dat", 3)
-    measurements = _table(folder, f"Robot{robot}_Measurement.dat", 4)
-    truth = _table(folder, f"Robot{robot}_Groundtruth.dat", 4)
-    landmarks = _table(folder, "Landmark_Groundtruth.dat", 5)
-    barcodes = _table(folder, "Barcodes.dat", 2)
+    names = [f"Robot{robot}_{kind}.dat" for kind in ("Odometry", "Measurement", "Groundtruth")]
+    names += ["Landmark_Groundtruth.dat", "Barcodes.dat"]
+    refuse_to_overwrite(
+        [folder / f"{name}{end}" for name in names for end in ("", ".gz")],
+        [out, sidecars.truth_path(out), sidecars.map_path(out)],
+    )
+    odometry, measurements, truth, landmarks, barcodes = (
+        _table(folder, name, columns) for name, columns in zip(names, (3, 4, 4, 5, 2))
+    )
     subject_of = {int(barcode): int(subject) for subject, barcode in barcodes}
     skipped: Counter[str] = Counter()
     kept = []
@@ -71,7 +83,7 @@ def import_mrclam(folder: str | Path, robot: int, out: str | Path) -> dict:
             kept.append((t, subject, rng, bearing))
     kept.sort()
     times = np.unique(np.concatenate([odometry[:, 0], [m[0] for m in kept]]))
-    out = Path(out)
+    _check_overlap(_found(folder, names[2]) or folder / names[2], truth[:, 0], times)
     records = []
     with LogWriter(out, beams=3) as writer:
         sample = 0
@@ -107,11 +119,25 @@ def import_mrclam(folder: str | Path, robot: int, out: str | Path) -> dict:
         "odometry_records": len(times),
         "landmark_records": len(kept),
         "skipped": dict(skipped),
+        "outside_truth": int(np.sum((record_times < truth[0, 0]) | (record_times > truth[-1, 0]))),
     }
 
 
+def _check_overlap(truth_file: Path, truth_times: np.ndarray, record_times: np.ndarray) -> None:
+    """Refuse truth whose times (T,) do not overlap the records' (R,) (seconds): every record would
+    get the pose at one end of it, one constant pose for the whole run."""
+    first, last = max(truth_times[0], record_times[0]), min(truth_times[-1], record_times[-1])
+    if not first < last:
+        raise ValueError(
+            f"{truth_file}: the truth spans t {truth_times[0]:.3f} to {truth_times[-1]:.3f} s and the odometry "
+            f"t {record_times[0]:.3f} to {record_times[-1]:.3f} s: they do not overlap, so no record would get "
+            "a true pose (files of different runs?)"
+        )
+
+
 def _interpolate_poses(truth: np.ndarray, times: np.ndarray) -> np.ndarray:
-    """Vicon poses (x, y, theta) at ``times``, linearly interpolated (theta unwrapped), clipped to its span."""
+    """Vicon poses (x, y, theta) at ``times``, linearly interpolated (theta unwrapped); a time outside
+    its span gets the pose at the nearer end (the import counts those records and requires an overlap)."""
     heading = np.unwrap(truth[:, 3])
     return np.column_stack(
         [

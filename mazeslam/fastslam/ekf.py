@@ -16,6 +16,11 @@ TWO_PI = 2.0 * np.pi
 ENTRYWISE_FROM = 64
 
 
+class NotPositiveDefinite(ValueError):
+    """An innovation covariance S = H P H^T + R that is not positive definite (or is NaN), found
+    before it is inverted: the filter's numbers have gone bad (``FastSLAM`` names the settings)."""
+
+
 def wrap(angle: np.ndarray) -> np.ndarray:
     """Angles (rad, any shape and size) wrapped to [-pi, pi]: a rounding, a multiply and a subtract,
     several times cheaper than ``geometry.wrap_angle``'s modulo (which also returns floats for
@@ -73,6 +78,8 @@ def update(
         noise: (k, k) or (n, k, k) measurement noise R.
     Returns the updated means (n, d) and covariances (n, d, d) (Joseph form: symmetric and
     positive definite), and the innovation covariances S = H P H^T + R (n, k, k).
+    Raises ``NotPositiveDefinite`` when an S is not positive definite (a covariance or noise gone
+    bad: nothing is inverted then, so no numpy warning).
 
     The matrices are tiny (d, k <= 3), so for a large batch the algebra is written entry by entry,
     the batch last (``_product``: a few numpy calls over all entries at once): several times faster
@@ -84,7 +91,7 @@ def update(
     p, h, r = _batch_last(covariance), _batch_last(jacobian), _batch_last(noise)
     ph_t = _product(p, _transpose(h))  # (d, k, n)
     s = _product(h, ph_t) + r
-    gain = _product(ph_t, _inverse(s))  # (d, k, n)
+    gain = _product(ph_t, _inverse(s, _checked_determinant(s)))  # (d, k, n)
     nu = residual.T  # (k, n)
     step = gain[:, 0] * nu[0]
     for j in range(1, len(nu)):
@@ -99,11 +106,32 @@ def _update_batched(mean, covariance, residual, jacobian, noise):
     """``update`` with batched ``matmul`` and ``inv`` (for small batches)."""
     h_t = np.swapaxes(jacobian, -1, -2)
     s = jacobian @ covariance @ h_t + noise
+    _checked_determinant(np.moveaxis(s, 0, -1))
     gain = covariance @ h_t @ np.linalg.inv(s)  # (n, d, k)
     new_mean = mean + np.einsum("nij,nj->ni", gain, residual)
     identity_minus = np.eye(mean.shape[1]) - gain @ jacobian
     joseph = identity_minus @ covariance @ np.swapaxes(identity_minus, -1, -2)
     return new_mean, joseph + gain @ noise @ np.swapaxes(gain, -1, -2), s
+
+
+def _checked_determinant(s: np.ndarray) -> np.ndarray:
+    """The determinants (n,) of the 1x1 or 2x2 innovation covariances ``s`` (k, k, n); raises
+    ``NotPositiveDefinite`` unless all are positive (NaN is not). With the landmark and pose
+    covariances positive semi-definite and the noise positive definite (``FastSLAM`` checks them
+    where they are made), S's diagonal is positive, so only its determinant can fail, to rounding
+    or underflow: one reduction per update."""
+    determinant = s[0, 0] if len(s) == 1 else s[0, 0] * s[1, 1] - s[0, 1] * s[1, 0]
+    if not determinant.min(initial=np.inf) > 0:
+        raise NotPositiveDefinite("an innovation covariance (H P H^T + R) is not positive definite")
+    return determinant
+
+
+def positive_definite(leading: np.ndarray, determinant: np.ndarray) -> bool:
+    """Whether the 2x2 (or 1x1) matrices with leading entries ``leading`` (n,) and determinants
+    ``determinant`` (n,) are all positive definite (Sylvester's criterion; NaN fails, inf is not
+    looked for: the filter's inputs are finite). Two reductions, no temporaries: cheap enough for
+    every update."""
+    return bool(leading.min(initial=np.inf) > 0 and determinant.min(initial=np.inf) > 0)
 
 
 def congruence(matrix: np.ndarray, transform: np.ndarray) -> np.ndarray:
@@ -140,11 +168,10 @@ def _transpose(a: np.ndarray) -> np.ndarray:
     return a.transpose(1, 0, 2)
 
 
-def _inverse(s: np.ndarray) -> np.ndarray:
-    """Inverse of a batch of 1x1 or 2x2 matrices (k, k, n), in closed form."""
+def _inverse(s: np.ndarray, det: np.ndarray) -> np.ndarray:
+    """Inverse of a batch of 1x1 or 2x2 matrices (k, k, n) of determinants ``det`` (n,), in closed form."""
     if len(s) == 1:
         return 1.0 / s
-    det = s[0, 0] * s[1, 1] - s[0, 1] * s[1, 0]
     return np.stack([np.stack([s[1, 1] / det, -s[0, 1] / det]), np.stack([-s[1, 0] / det, s[0, 0] / det])])
 
 

@@ -58,6 +58,39 @@ class Association(enum.StrEnum):
     KNOWN = "known"  #: identities given with the observations
 
 
+class FilterDivergence(ValueError):
+    """The filter's numbers went bad: an observation noise, innovation or landmark covariance that
+    is not positive definite, a pose or a particle weight that is not finite. Raised where it first
+    happens, before numpy divides by it, with what went bad and the settings to check (the noise
+    settings and association, which a log they do not fit breaks first); ``run_fastslam`` adds the
+    log's line. A ``ValueError``: the command line prints it as one line.
+
+    Attributes:
+        what: what went bad, in words.
+    """
+
+    def __init__(self, what: str, params: FastSLAMParams | None = None, where: str | None = None):
+        self.what, self.params, self.where = what, params, where
+        hint = f"; {settings_hint(params)}" if params is not None else ""
+        super().__init__(f"{where + ': ' if where else ''}FastSLAM diverged: {what}{hint}")
+
+    def at(self, where: str) -> FilterDivergence:
+        """This divergence located at ``where`` (the log and its line, for the message)."""
+        return FilterDivergence(self.what, self.params, where)
+
+
+def settings_hint(params: FastSLAMParams) -> str:
+    """The settings a log that does not fit them breaks first, with their values: one clause for
+    ``FilterDivergence`` and the pipeline's checks."""
+    return (
+        f"check [fastslam]'s observation noise (sigmaR = {params.sigmaR:g}, sigmaB = {params.sigmaB:g}, "
+        f"observation_scale = {params.observation_scale:g}), odometry noise (sigmaX = {params.sigmaX:g}, "
+        f"sigmaTH = {params.sigmaTH:g}, sigmaTH_drive = {params.sigmaTH_drive:g}; `mazeslam calibrate` measures "
+        f"both) and association ({params.association.value!r}) against this log; a log imported from MRCLAM "
+        "wants --config configs/mrclam.toml"
+    )
+
+
 @dataclass(frozen=True)
 class FastSLAMParams:
     """Filter settings, named as in the exercise's control_panel.m where it has them.
@@ -144,16 +177,21 @@ class FastSLAMParams:
         require(too_many is None, f"NPARTICLES: {too_many}")
         require(self.seed >= 0, f"seed must be a non-negative integer, got {self.seed}")
         for name in ("sigmaR", "sigmaB"):
-            require(getattr(self, name) >= 0, f"{name} must be >= 0, got {getattr(self, name)}")
+            value = getattr(self, name)
+            require(0 <= value < math.inf, f"{name} must be >= 0 and finite, got {value}")
         OdometryNoise(self.sigmaX, self.sigmaTH, self.sigmaTH_drive)  # checks the odometry terms
-        require(self.observation_scale >= 0, f"observation_scale must be >= 0, got {self.observation_scale}")
         require(
-            self.sigmaR > 0 or self.observation_scale > 0,
-            "sigmaR must be positive unless the observations' own covariances are used (observation_scale > 0)",
+            0 <= self.observation_scale < math.inf,
+            f"observation_scale must be >= 0 and finite, got {self.observation_scale}",
         )
         require(
-            0 < self.gate <= self.new_landmark_gate,
-            f"need 0 < gate <= new_landmark_gate, got {self.gate} and {self.new_landmark_gate}",
+            (self.sigmaR > 0 and self.sigmaB > 0) or self.observation_scale > 0,
+            "sigmaR and sigmaB must be positive unless the observations' own covariances are used "
+            f"(observation_scale > 0), got {self.sigmaR} and {self.sigmaB}",
+        )
+        require(
+            0 < self.gate <= self.new_landmark_gate < math.inf,
+            f"need 0 < gate <= new_landmark_gate (finite), got {self.gate} and {self.new_landmark_gate}",
         )
         require(
             0 <= self.resample_threshold <= 1, f"resample_threshold must be in [0, 1], got {self.resample_threshold}"
@@ -323,6 +361,8 @@ class FastSLAM:
         without noise and accumulates the motion's covariance, to be combined with the next scan's
         observations (``update``) before a pose is drawn.
         """
+        if not (math.isfinite(distance) and math.isfinite(turn)):
+            raise ValueError(f"an odometry increment must be finite, got {distance} m and {turn} rad")
         self.poses, self.pose_covariances = self.proposal.predict(
             self.poses, self.pose_covariances, distance, turn, self.motion_noise, self.rng
         )
@@ -332,6 +372,8 @@ class FastSLAM:
         robot frame (laser odometry), with the noise of ``OdometryNoise.relative_covariance``; the
         proposal decides when the noise is drawn, as in ``predict``."""
         increment = np.asarray(increment, dtype=float)
+        if not np.isfinite(increment).all():
+            raise ValueError(f"a relative motion must be finite, got {increment.tolist()}")
         covariance = self.motion_noise.relative_covariance(increment)
         self.poses, self.pose_covariances = self.proposal.predict_relative(
             self.poses, self.pose_covariances, increment, covariance, self.rng
@@ -537,6 +579,10 @@ class FastSLAM:
         t01 = t01 + noise[ks, 0, 1]
         t11 = t11 + noise[ks, 1, 1]
         det = t00 * t11 - t01 * t01
+        if not ekf.positive_definite(t00, det):
+            raise FilterDivergence(
+                "the predicted covariance of an observation of a landmark is not positive definite", self.params
+            )
         nu0 = observations[ks, 0] - rho
         nu1 = ekf.wrap(observations[ks, 1] - (np.arctan2(dy, dx) - poses[2]))  # the predicted bearing unwrapped
         # The model keeps the candidate columns with a triple left only (the others would be inf).
@@ -570,6 +616,10 @@ class FastSLAM:
         within reach; 2. draw the poses (FastSLAM 2.0); 3. update matched landmarks, start new
         ones and weigh the particles; 4. drop tentative landmarks that were missed; 5. resample
         when the weights degenerate.
+
+        Raises ``FilterDivergence`` where the numbers first go bad (an observation noise,
+        innovation or landmark covariance not positive definite, a pose or weight not finite),
+        before numpy is asked to divide by them; the filter is not to be used after it.
         """
         observations = np.asarray(observations, dtype=float).reshape(-1, 2)
         report = UpdateReport(observations=len(observations))
@@ -577,9 +627,46 @@ class FastSLAM:
         known = self.params.association == Association.KNOWN
         if count and known and ids is None:
             raise ValueError("association='known' needs the observations' ids")
+        if not math.isfinite(observations.sum()):  # a sum: NaN or inf anywhere makes it so
+            raise ValueError("observations must be finite ranges and bearings")
+        self._check_particles()
         while count and not self._has_room(count):  # for every observation to start a landmark
             self._grow()
         noise = self.params.inflation * self.params.observation_noise(covariances, count)
+        if count and not (math.isfinite(noise.sum()) and _positive_definite(noise)):
+            raise FilterDivergence(self._noise_problem(covariances), self.params)
+        try:
+            return self._update(observations, noise, ids, facings, report)
+        except ekf.NotPositiveDefinite as error:
+            raise FilterDivergence(str(error), self.params) from None
+
+    def _check_particles(self) -> None:
+        """Raise ``FilterDivergence`` unless every pose and log weight is finite (the weights then
+        normalise: not all zero, none NaN). Two sums (a NaN or inf anywhere makes theirs so; poses
+        and log weights of a sane size do not overflow): a few microseconds."""
+        if math.isfinite(self.poses.sum() + self.log_weights.sum()):
+            return
+        if not np.isfinite(self.poses).all():
+            raise FilterDivergence("a particle's pose is not finite", self.params)
+        raise FilterDivergence("the particle weights are not finite", self.params)
+
+    def _noise_problem(self, covariances) -> str:
+        """Why the observation noise is not positive definite, in words."""
+        if covariances is None:
+            why = "these observations come without a covariance of their own (landmark records)"
+        elif self.params.observation_scale == 0:
+            why = "observation_scale = 0 leaves the observations' own covariances out"
+        else:
+            return "an observation's own covariance (times observation_scale) is not positive definite"
+        return (
+            f"the observation noise diag(sigmaR^2, sigmaB^2) is singular: {why}, so sigmaR and sigmaB are "
+            "their whole noise and both must be above 0"
+        )
+
+    def _update(self, observations: np.ndarray, noise: np.ndarray, ids, facings, report: UpdateReport) -> UpdateReport:
+        """``update``'s steps, with the observation noise ``noise`` (K, 2, 2) checked."""
+        count = len(observations)
+        known = self.params.association == Association.KNOWN
         relative_facings = None if facings is None else np.asarray(facings, dtype=float)
         # 1. Association among the candidates, under the model the weights use.
         m = self._used_slots()
@@ -608,6 +695,7 @@ class FastSLAM:
             matched_now = np.zeros_like(self.exists)
             new = self._new_observations(assigned, model, ids, report)
             self._weigh(assigned, new, likelihood, noise)
+            self._check_particles()
             self._correct_landmarks(assigned, observations, noise, matched_now, report)
             self._add_landmarks(new, observations, noise, ids, relative_facings, matched_now)
             # 4. Tentative landmarks predicted in view but not seen.
@@ -659,6 +747,8 @@ class FastSLAM:
             predicted, jacobian = ekf.range_bearing_landmark(self.poses[r], self.means[r, j])
             residual = ekf.innovation(observations[k], predicted)
             means, covariances, _ = ekf.update(self.means[r, j], self.covariances[r, j], residual, jacobian, noise[k])
+            if not _positive_definite(covariances):
+                raise FilterDivergence("a landmark's covariance is not positive definite after its update", self.params)
             self.means[r, j], self.covariances[r, j] = means, covariances
             self.seen[r, j] += 1
             self.missed[r, j] = 0
@@ -690,7 +780,10 @@ class FastSLAM:
         self.means[rows, slots] = self.poses[rows, :2] + rho[:, None] * np.column_stack([cos_a, sin_a])
         # Inverse measurement Jacobian dm/d(rho, bearing), then Sigma = G R G^T.
         g = np.stack([np.stack([cos_a, -rho * sin_a], -1), np.stack([sin_a, rho * cos_a], -1)], -2)
-        self.covariances[rows, slots] = g @ noise[ks] @ np.swapaxes(g, -1, -2)
+        covariances = g @ noise[ks] @ np.swapaxes(g, -1, -2)
+        if not _positive_definite(covariances):
+            raise FilterDivergence("a new landmark's covariance is not positive definite", self.params)
+        self.covariances[rows, slots] = covariances
         self.exists[rows, slots] = True
         self.seen[rows, slots] = 1
         self.missed[rows, slots] = 0
@@ -817,3 +910,9 @@ def _normalised_innovations(
             values.append(np.average(distance2[rows, k], weights=weights[rows]))
             indexes.append(k)
     return np.asarray(values, dtype=float), np.asarray(indexes, dtype=np.int64)
+
+
+def _positive_definite(matrices: np.ndarray) -> bool:
+    """Every 2x2 matrix of ``matrices`` (n, 2, 2) (covariances: symmetric) is positive definite."""
+    a, b, d = matrices[:, 0, 0], matrices[:, 0, 1], matrices[:, 1, 1]
+    return ekf.positive_definite(a, a * d - b * b)

@@ -152,9 +152,12 @@ class ObservationProposal:
             residual = ekf.innovation(observation, z_hat)
             mean[at], covariance[at], s = ekf.update(mean[at], covariance[at], residual, h_pose, landmark_noise)
             s00, s01, s11 = s[:, 0, 0], s[:, 0, 1], s[:, 1, 1]
-            determinant[rows, k] = s00 * s11 - s01 * s01
+            det = s00 * s11 - s01 * s01
+            if not det.min() > 0:  # ekf.update checked S, but rounding may still differ: checked before dividing
+                raise ekf.NotPositiveDefinite("an innovation covariance (H P H^T + R) is not positive definite")
+            determinant[rows, k] = det
             nu0, nu1 = residual[:, 0], residual[:, 1]
-            distance2[rows, k] = (s11 * nu0 * nu0 - 2 * s01 * nu0 * nu1 + s00 * nu1 * nu1) / determinant[rows, k]
+            distance2[rows, k] = (s11 * nu0 * nu0 - 2 * s01 * nu0 * nu1 + s00 * nu1 * nu1) / det
         drawn = ekf.sample_gaussians(mean, covariance, rng)
         drawn[:, 2] = wrap_angle(drawn[:, 2])
         return drawn, np.zeros_like(covariance), (distance2, determinant)

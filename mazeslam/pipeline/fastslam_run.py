@@ -17,7 +17,7 @@ from mazeslam.core.beams import EXERCISE_CONVENTION, BeamGeometry
 from mazeslam.core.motion import dead_reckoning
 from mazeslam.data import log
 from mazeslam.data.loaded_run import LoadedRun
-from mazeslam.fastslam.filter import Association, FastSLAM, FastSLAMParams
+from mazeslam.fastslam.filter import Association, FastSLAM, FastSLAMParams, FilterDivergence
 from mazeslam.fastslam.identities import truth_identities
 from mazeslam.features.corners import CornerExtractor, CornerParams
 from mazeslam.pipeline.config import MapKind, SlamConfig
@@ -51,6 +51,7 @@ def run_fastslam(
     a live view: ``mazeslam.viz.live``); it must not change the filter.
     """
     params = params or FastSLAMParams()
+    _check_landmark_noise(course_log, params)
     slam = FastSLAM(params, start_pose)
     extractor = CornerExtractor(geometry, course_log.width, corner_params) if course_log.n_beams else None
     count = len(course_log)
@@ -97,9 +98,14 @@ def run_fastslam(
                 covariances, ids, facings = None, np.array([r.landmark for r in group]), None
                 kinds = ["landmark"] * len(group)
             observation_kinds.append(kinds)
-            reports.append(
-                slam.update(z, covariances, ids if params.association == Association.KNOWN else None, facings)
-            )
+            try:
+                report = slam.update(z, covariances, ids if params.association == Association.KNOWN else None, facings)
+            except FilterDivergence as error:
+                if bar is not None:  # the error is the last line, not a bar left half drawn
+                    bar.leave = False
+                    bar.close()
+                raise error.at(_place(course_log, position)) from None
+            reports.append(report)
             if snapshot_every and (len(reports) - 1) % snapshot_every == 0:
                 snapshots.append((record.index, slam.poses.copy(), slam.landmarks()[0]))
             if on_update is not None:
@@ -138,6 +144,28 @@ def run_fastslam(
         dropped_odometry=dropped,
         laser_odometry=laser,
     )
+
+
+def _place(course_log: log.CourseLog, index: int) -> str:
+    """Where record ``index`` of ``course_log`` is, for messages: the file and line, the time."""
+    line = course_log.line_numbers[index] if course_log.line_numbers is not None else None
+    at = f"{course_log.source}:{line}" if line is not None else f"{course_log.source}, record {index}"
+    return f"{at} (t {course_log.times[index]:.3f} s)"
+
+
+def _check_landmark_noise(course_log: log.CourseLog, params: FastSLAMParams) -> None:
+    """Refuse, before any work, a log of landmark observations under settings that give them no
+    noise: they come without a covariance of their own (unlike the corners of a scan), so
+    ``[fastslam] sigmaR`` and ``sigmaB`` are their whole noise, and a zero makes every update's
+    covariance singular (the defaults, measured for scans, are 0)."""
+    landmarks = np.flatnonzero(course_log.is_landmark)
+    if len(landmarks) and (params.sigmaR == 0 or params.sigmaB == 0):
+        raise ValueError(
+            f"{_place(course_log, int(landmarks[0]))}: this log's {len(landmarks)} landmark observations come "
+            "without a covariance of their own, so [fastslam] sigmaR and sigmaB are their whole noise, and they "
+            f"are {params.sigmaR:g} and {params.sigmaB:g} here: set both above 0 (`mazeslam calibrate` measures "
+            "them against truth); a log imported from MRCLAM wants --config configs/mrclam.toml"
+        )
 
 
 def _scan_observations(extractor: CornerExtractor, record: log.ScanRecord):

@@ -6,7 +6,7 @@ from pathlib import Path
 
 from mazeslam.data.beam_detection import with_detected_convention
 from mazeslam.data.loaded_run import LoadedRun, load_run
-from mazeslam.pipeline.config import MapKind, SlamConfig
+from mazeslam.pipeline.config import MapKind, SlamConfig, load_slam_config
 from mazeslam.pipeline.fastslam_run import fastslam_on_run
 from mazeslam.pipeline.grid_run import grid_on_run
 from mazeslam.pipeline.result import SlamResult
@@ -15,7 +15,7 @@ from mazeslam.registration.scan_matching import LaserOdometry
 
 def run_slam(
     run: LoadedRun,
-    config: SlamConfig | None = None,
+    config: SlamConfig | str | Path | None = None,
     progress: bool = True,
     snapshot_every: int = 0,
     laser: LaserOdometry | None = None,
@@ -25,8 +25,9 @@ def run_slam(
     (``[fastslam]``, ``fastslam_on_run``) or the grid filter (``[grid]``, ``grid_on_run``).
 
     Args:
-        run: the log, its beam geometry, start pose and sidecars (``load_run``).
-        config: every setting (``SlamConfig``; the defaults when None).
+        run: the log, its beam geometry, start pose and sidecars (``load_run``; for a log file,
+            ``slam_on_file``).
+        config: every setting (``SlamConfig``, or the path of its TOML file; the defaults when None).
         progress: draw a progress bar.
         snapshot_every: keep a frame for an animation every that many observation updates (0: none).
         laser: corner FastSLAM's laser odometry of this log, if already matched (it does not depend
@@ -35,15 +36,30 @@ def run_slam(
             ``FastSLAM`` or the ``GridSlam``), for a live view (``mazeslam.viz.live``); it must not
             change the filter.
     """
-    config = config or SlamConfig()
+    if not isinstance(run, LoadedRun):
+        raise TypeError(
+            f"run_slam takes a LoadedRun (load_run(path)), got {type(run).__name__}; for a log file: slam_on_file(path)"
+        )
+    config = as_config(config)
     if config.map.kind == MapKind.GRID:
         return grid_on_run(run, config, progress, snapshot_every, on_update)
     return fastslam_on_run(run, config, progress, snapshot_every, laser, on_update)
 
 
-def slam_on_file(path: str | Path, config: SlamConfig | None = None, progress: bool = True) -> SlamResult:
+def slam_on_file(path: str | Path, config: SlamConfig | str | Path | None = None, progress: bool = True) -> SlamResult:
     """``run_slam`` on a log file, as ``mazeslam slam`` runs it: its sidecars read beside it,
     ``[sensor]`` applied, and the beam convention detected from its scans when neither says it
-    (``with_detected_convention``)."""
-    config = config or SlamConfig()
+    (``with_detected_convention``). ``config``: a ``SlamConfig``, the path of its TOML file, or
+    None (the defaults)."""
+    config = as_config(config)
     return run_slam(with_detected_convention(load_run(path, config.sensor), config), config, progress)
+
+
+def as_config(config: SlamConfig | str | Path | None) -> SlamConfig:
+    """``config`` as a ``SlamConfig``: itself, read from the TOML file it names, or the defaults
+    (None); anything else is a ``TypeError`` saying what is wanted."""
+    if config is None or isinstance(config, SlamConfig):
+        return config or SlamConfig()
+    if isinstance(config, (str, Path)):
+        return load_slam_config(config)
+    raise TypeError(f"config must be a SlamConfig or the path of its TOML file, got {type(config).__name__}")

@@ -11,6 +11,7 @@ out as glitches (``[odometry] jump_tolerance``) move nothing here either.
 from __future__ import annotations
 
 import json
+import math
 import time
 from dataclasses import dataclass
 from pathlib import Path
@@ -83,7 +84,8 @@ def optimum_columns(
 ) -> dict | None:
     """The known-association optimum's ATE RMSE (m, as estimated and aligned) at the records the filter
     was scored at (``score.records``) and the filter's ratio to it (``optimum_ratio``,
-    ``optimum_aligned_ratio``: 1 is as good as any estimator can be); None without ``has_known_optimum``.
+    ``optimum_aligned_ratio``: 1 is as good as any estimator can be; NaN where the optimum has no
+    error, as on a log of one pose); None without ``has_known_optimum``.
     ``optimum_poses``: ``known_optimum(run, config).poses`` (R, 3) if already computed (a sweep computes
     it once for the runs that share a log and the settings it depends on)."""
     if run.truth is None or not has_known_optimum(run):
@@ -95,17 +97,32 @@ def optimum_columns(
     return {
         "optimum_ate_rmse": row["ate_rmse"],
         "optimum_ate_aligned_rmse": row["aligned_rmse"],
-        "optimum_ratio": score.ate() / row["ate_rmse"],
-        "optimum_aligned_ratio": score.ate(aligned=True) / row["aligned_rmse"],
+        "optimum_ratio": _ratio(score.ate(), row["ate_rmse"]),
+        "optimum_aligned_ratio": _ratio(score.ate(aligned=True), row["aligned_rmse"]),
     }
+
+
+#: Metres: an optimum's ATE at or below this is no error (rounding; the log holds 1e-6), and a ratio to
+#: it is undefined.
+NO_ERROR = 1e-9
+
+
+def _ratio(error: float, optimum: float) -> float:
+    """A filter's error over the optimum's; NaN (undefined) where the optimum has no error (a log of
+    one pose, or one the observations pin down exactly)."""
+    return error / optimum if optimum > NO_ERROR else math.nan
 
 
 def optimum_line(columns: dict, filter_name: str = "FastSLAM") -> str:
     """``optimum_columns`` as one line for ``mazeslam slam`` (the filter named ``filter_name``)."""
+    ratio, aligned = (
+        "undefined" if math.isnan(columns[key]) else f"{columns[key]:.2f}"
+        for key in ("optimum_ratio", "optimum_aligned_ratio")
+    )
     return (
         f"Batch optimum (known association, the filter's noise): ATE {columns['optimum_ate_rmse']:.4f} m "
-        f"(aligned {columns['optimum_ate_aligned_rmse']:.4f} m); {filter_name}/optimum ratio "
-        f"{columns['optimum_ratio']:.2f} (aligned {columns['optimum_aligned_ratio']:.2f})"
+        f"(aligned {columns['optimum_ate_aligned_rmse']:.4f} m); {filter_name}/optimum ratio {ratio} (aligned "
+        f"{aligned})" + (": the optimum has no error" if "undefined" in (ratio, aligned) else "")
     )
 
 

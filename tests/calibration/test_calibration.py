@@ -122,3 +122,21 @@ def test_pooled_residuals_number_each_logs_landmarks_and_updates_apart():
     assert pooled.updates.tolist() == [0, 1, 3, 4]
     assert pooled.errors[:, 0].tolist() == [0.1, 0.1, 0.2, 0.2]
     assert pooled.kinds.tolist() == ["corner"] * 4
+
+
+def test_a_landmark_record_inside_a_scan_log_is_refused_at_its_line(default_run, tmp_path):
+    """Issue 36 item 11: calibrating such a log ended in 'array must not contain infs or NaNs' (the
+    filter's NaN trajectory); the log is now refused where it is read, naming the line."""
+    import shutil
+
+    from mazeslam.data import sidecars
+    from mazeslam.data.log import LogFormatError
+
+    lines = default_run.log_path.read_text().splitlines()
+    width = len(lines[0].split())
+    lines.insert(6, f"{lines[5].split()[0]} 2 3 0.2 0.1 " + " ".join(["-1"] * (width - 5)))
+    path = tmp_path / "mixed.log"
+    path.write_text("\n".join(lines) + "\n")
+    shutil.copy(sidecars.map_path(default_run.log_path), sidecars.map_path(path))
+    with pytest.raises(LogFormatError, match=r"mixed.log:7: a landmark observation \(flag 2\) in a log of \d+ scans"):
+        load_run(path)

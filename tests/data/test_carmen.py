@@ -308,3 +308,33 @@ def test_malformed_robotlaser_names_the_line(tmp_path, line, message):
     path.write_text("\n".join(ROBOTLASER_SAMPLE.splitlines()[:2] + [line]) + "\n")
     with pytest.raises(LogFormatError, match=message):
         read_carmen(path)
+
+
+def test_import_onto_its_own_input_is_refused_and_the_input_kept(tmp_path):
+    """Issue 36 item 7: `mazeslam import carmen runs/aces.log --out runs/aces.log` overwrote its
+    input and exited 0."""
+    path = tmp_path / "aces.log"
+    path.write_text(SAMPLE)
+    for out in (path, tmp_path / "other" / ".." / "aces.log"):
+        with pytest.raises(ValueError, match="is the input file.*: writing there would overwrite or replace it"):
+            import_carmen(path, out)
+    assert path.read_text() == SAMPLE
+    truth_named = tmp_path / "run.truth.csv"  # an input where the import would put a sidecar
+    truth_named.write_text(SAMPLE)
+    with pytest.raises(ValueError, match="run.truth.csv: is the input file"):
+        import_carmen(truth_named, tmp_path / "run.log")
+    assert truth_named.read_text() == SAMPLE and not (tmp_path / "run.log").exists()
+
+
+def test_a_byte_order_mark_before_the_first_line_is_dropped(tmp_path):
+    path = tmp_path / "bom.log"
+    path.write_bytes(b"\xef\xbb\xbf" + SAMPLE.encode())
+    carmen = read_carmen(path)
+    assert carmen.params == read_carmen(_plain(tmp_path, SAMPLE)).params == {"robot_front_laser_max": "50"}
+    assert "\ufeff#" not in carmen.ignored
+
+
+def _plain(folder, text):
+    path = folder / "plain.log"
+    path.write_text(text)
+    return path

@@ -65,14 +65,16 @@ WEIRD = [
 ]
 
 
-def _base_log(beams: int = 6, records: int = 24) -> str:
+def _base_log(beams: int = 6, records: int = 24, landmarks: bool = False) -> str:
+    """A small valid log: odometry, and scans or (``landmarks``) landmark observations (a log holds
+    one kind or the other)."""
     rng = np.random.default_rng(0)
     lines = ["# a small course log"]
     for k in range(records):
         t = 0.2 * k
-        if k % 3 == 2:
+        if k % 3 == 2 and not landmarks:
             lines.append(f"{t:.6f} 1 " + " ".join(f"{r:.6f}" for r in rng.uniform(0, 0.5, beams)))
-        elif k % 7 == 5:
+        elif k % 3 == 2 or k % 7 == 5 and landmarks:
             lines.append(f"{t:.6f} 2 {k % 4} 0.3 0.5 " + " ".join(["-1"] * (beams - 3)))
         else:
             lines.append(
@@ -82,6 +84,7 @@ def _base_log(beams: int = 6, records: int = 24) -> str:
 
 
 BASE_LOG = _base_log()
+LANDMARK_LOG = _base_log(landmarks=True)
 
 
 def _assert_finite_log(course_log: log.CourseLog) -> None:
@@ -126,7 +129,7 @@ def test_log_reader_reads_or_refuses_any_text(text, strict):
 @FUZZ
 @given(data=st.data())
 def test_log_reader_on_mutated_valid_logs(data):
-    lines = BASE_LOG.splitlines()
+    lines = data.draw(st.sampled_from([BASE_LOG, LANDMARK_LOG])).splitlines()
     for _ in range(data.draw(st.integers(1, 4))):
         row = data.draw(st.integers(0, len(lines) - 1))
         parts = lines[row].split()
@@ -273,7 +276,7 @@ def test_mutated_log_corpus(tmp_path):
     rng = np.random.default_rng(19)
     refused = 0
     for k in range(LOG_CORPUS):
-        text = mutate_text(BASE_LOG, rng)
+        text = mutate_text(LANDMARK_LOG if k % 4 == 3 else BASE_LOG, rng)
         data = text.encode()
         if rng.random() < 0.05:  # binary garbage or a gzip stream, whole or cut
             data = (

@@ -159,3 +159,61 @@ def test_bad_landmark_records(line, reason):
     with pytest.raises(log.LogFormatError) as error:
         log.parse(text, "lm.log")
     assert (reason or "not padded with -1 after id, range and bearing") in str(error.value)
+
+
+def test_a_utf8_byte_order_mark_is_dropped(tmp_path):
+    """Issue 36 item 11: a log saved by an editor that writes a BOM read as the same log (the BOM
+    once showed as ``'\\ufeff0.200000' is not a number``)."""
+    path = tmp_path / "bom.log"
+    path.write_bytes(b"\xef\xbb\xbf" + GOOD.encode())
+    for strict in (True, False):
+        course_log = log.read(path, strict=strict)
+        np.testing.assert_array_equal(course_log.values, log.parse(GOOD).values)
+        assert course_log.line_numbers.tolist() == [1, 2, 3, 4] and not course_log.skipped
+
+
+LANDMARK_IN_SCANS = GOOD + "0.5 2 3 0.2 0.1 -1\n0.7 1 0.5 0.5 0.5 0.5\n"
+
+
+def test_a_landmark_record_in_a_log_of_scans_is_a_bad_line():
+    """Issue 36 item 11: a landmark record inside a scan log once gave a NaN trajectory; no filter,
+    smoother or calibration weighs the two kinds together, so the log is refused at its line."""
+    with pytest.raises(log.LogFormatError) as error:
+        log.parse(LANDMARK_IN_SCANS, "mixed.log")
+    assert str(error.value) == (
+        "mixed.log:5: a landmark observation (flag 2) in a log of 2 scans (1 such line): "
+        "a log holds scans or landmark observations, not both"
+    )
+    lenient = log.parse(LANDMARK_IN_SCANS, "mixed.log", strict=False)
+    assert not lenient.is_landmark.any() and lenient.is_scan.sum() == 2
+    assert lenient.line_numbers.tolist() == [1, 2, 3, 4, 6]
+    assert [(skip.line, skip.reason.split(":")[0]) for skip in lenient.skipped] == [
+        (5, "a landmark observation (flag 2) in a log of 2 scans (1 such line)")
+    ]
+
+
+def test_a_scan_in_a_log_of_landmark_observations_is_the_bad_line():
+    text = "0.1 0 0.01 0.0 -1\n0.1 2 3 1.5 0.1\n0.2 2 4 1.5 0.2\n0.3 1 0.5 0.5 0.5\n"
+    with pytest.raises(log.LogFormatError, match=r"landmarks.log:4: a scan \(flag 1\) in a log of 2 landmark"):
+        log.parse(text, "landmarks.log")
+    # Read line by line (a bad value elsewhere): leniently, both bad lines are left out.
+    lenient = log.parse(text + "0.4 0 0.01 abc -1\n", "landmarks.log", strict=False)
+    assert [skip.line for skip in lenient.skipped] == [4, 5] and lenient.is_landmark.sum() == 2
+    assert "a scan (flag 1) in a log of 2 landmark observations" in lenient.skipped[0].reason
+
+
+def test_an_output_that_is_an_input_is_refused(tmp_path):
+    source = tmp_path / "in.log"
+    source.write_text(GOOD)
+    with pytest.raises(ValueError, match="in.log: is the input file: writing there would overwrite or replace it"):
+        log.refuse_to_overwrite([source], [tmp_path / "out.log", source])
+    with pytest.raises(ValueError, match=f"is the input file {source}"):
+        log.refuse_to_overwrite([source], [tmp_path / "sub" / ".." / "in.log"])
+    link = tmp_path / "link.log"
+    link.symlink_to(source)
+    with pytest.raises(ValueError, match="link.log: is the input file"):
+        log.refuse_to_overwrite([source], [link])
+    with pytest.raises(ValueError, match="is the input file"):  # one that does not exist yet is replaced
+        log.refuse_to_overwrite([tmp_path / "missing.dat"], [tmp_path / "missing.dat"])
+    log.refuse_to_overwrite([source], [tmp_path / "out.log"])
+    assert source.read_text() == GOOD

@@ -136,3 +136,37 @@ def test_from_run_on_the_exercise_robot_log(course_log_path, tmp_path):
 def test_from_run_refuses_a_folder_that_is_not_a_slam_run(default_run, tmp_path):
     with pytest.raises(ValueError, match="not a `mazeslam slam` output folder"):
         invoke("smooth", default_run.log_path, "--association", "from-run", tmp_path)
+
+
+def _one_scan_log(default_run, folder):
+    """The default run cut to its first scan record alone, with its true pose and the world's map
+    (starting there): a log of one pose, which the optimum places without error."""
+    from mazeslam.data import log
+
+    course_log = log.read(default_run.log_path)
+    scan = int(np.flatnonzero(course_log.is_scan)[0])
+    times, truth = sidecars.read_truth(sidecars.truth_path(default_run.log_path))
+    path = folder / "one_scan.log"
+    with log.LogWriter(path, course_log.width) as writer:
+        writer.write_scan(course_log.times[scan], course_log.values[scan])
+    sidecars.write_truth(sidecars.truth_path(path), times[scan : scan + 1], truth[scan : scan + 1])
+    world = json.loads(sidecars.map_path(default_run.log_path).read_text())
+    world["start_pose"] = truth[scan].tolist()
+    sidecars.map_path(path).write_text(json.dumps(world))
+    return path
+
+
+def test_the_optimum_of_a_one_scan_log_leaves_the_ratio_undefined(default_run, tmp_path):
+    """Issue 36 item 11: a one-scan log with truth ended in ZeroDivisionError (the optimum's ATE is 0)."""
+    from mazeslam.smoothing.optimum import optimum_line
+
+    run = load_run(_one_scan_log(default_run, tmp_path))
+    assert has_known_optimum(run)
+    score = score_run(run, run_slam(run, SlamConfig(), progress=False))
+    columns = optimum_columns(run, SlamConfig(), score)
+    assert columns["optimum_ate_rmse"] == columns["optimum_ate_aligned_rmse"] == 0.0
+    assert np.isnan(columns["optimum_ratio"]) and np.isnan(columns["optimum_aligned_ratio"])
+    assert optimum_line(columns).endswith("ratio undefined (aligned undefined): the optimum has no error")
+    result = invoke("slam", run.path, "--out", tmp_path / "slam", "--quiet")
+    assert result.exit_code == 0, result.output
+    assert "FastSLAM/optimum ratio undefined (aligned undefined): the optimum has no error" in result.output
