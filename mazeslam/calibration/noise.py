@@ -32,12 +32,13 @@ import numpy as np
 from scipy.optimize import nnls
 
 from mazeslam.calibration.odometry_noise import MeasuredOdometryNoise, fit_noise, motion_stretch_errors
+from mazeslam.core.config import with_settings
 from mazeslam.data import log
 from mazeslam.data.loaded_run import LoadedRun
 from mazeslam.fastslam import ekf
 from mazeslam.fastslam.identities import identities_along
 from mazeslam.features.corners import CornerExtractor
-from mazeslam.pipeline import run_slam
+from mazeslam.pipeline import MapKind, run_slam
 from mazeslam.registration.scan_matching import laser_odometry
 
 #: Beams hitting a wall farther than this from its normal are left out (their range errors are
@@ -338,7 +339,9 @@ def _measure_log(run: LoadedRun, config, progress: bool) -> _LogMeasurements:
     if run.truth is not None and len(run.true_corners):
         reference, poses, landmarks = "truth", run.truth, run.true_corners
     else:
-        result = run_slam(run, config, progress, laser=laser)
+        # The corner noises are measured against corner FastSLAM's landmarks, whatever [map] kind says.
+        corner_fastslam = with_settings(config, {"map.kind": MapKind.LANDMARKS})
+        result = run_slam(run, corner_fastslam, progress, laser=laser)
         reference, poses, landmarks = "the filter's path and map", result.mean_poses, result.landmarks
     stretches = motion_stretch_errors(
         run.log_without_glitches(config.odometry.jump_tolerance), run.truth if run.truth is not None else poses, laser
@@ -353,8 +356,8 @@ def _measure_log(run: LoadedRun, config, progress: bool) -> _LogMeasurements:
 
 def calibrate(run: LoadedRun, config, progress: bool = False) -> Calibration:
     """Measure ``run``'s noises (see the module docstring) under the slam ``config``
-    (``SlamConfig``: its corner settings, scan matching and, without truth, the filter that
-    provides the reference path and map)."""
+    (``SlamConfig``: its corner settings, scan matching and, without truth, corner FastSLAM's
+    ``[fastslam]`` settings: its path and landmarks are the reference, whatever ``[map] kind`` says)."""
     return calibrate_logs([run], config, progress)
 
 

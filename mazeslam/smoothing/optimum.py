@@ -114,13 +114,17 @@ def _ratio(error: float, optimum: float) -> float:
 
 
 def optimum_line(columns: dict, filter_name: str = "FastSLAM") -> str:
-    """``optimum_columns`` as one line for ``mazeslam slam`` (the filter named ``filter_name``)."""
+    """``optimum_columns`` as one line for ``mazeslam slam`` (the filter named ``filter_name``; the
+    optimum is always of the corner landmarks with ``[fastslam]``'s noise, which the line says when
+    the filter is another)."""
     ratio, aligned = (
         "undefined" if math.isnan(columns[key]) else f"{columns[key]:.2f}"
         for key in ("optimum_ratio", "optimum_aligned_ratio")
     )
+    # The optimum smooths the corners with [fastslam]'s noise: the grid filter's own noise is not it.
+    noise = "the filter's noise" if filter_name == "FastSLAM" else "corner landmarks, [fastslam]'s noise"
     return (
-        f"Batch optimum (known association, the filter's noise): ATE {columns['optimum_ate_rmse']:.4f} m "
+        f"Batch optimum (known association, {noise}): ATE {columns['optimum_ate_rmse']:.4f} m "
         f"(aligned {columns['optimum_ate_aligned_rmse']:.4f} m); {filter_name}/optimum ratio {ratio} (aligned "
         f"{aligned})" + (": the optimum has no error" if "undefined" in (ratio, aligned) else "")
     )

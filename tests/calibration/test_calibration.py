@@ -140,3 +140,16 @@ def test_a_landmark_record_inside_a_scan_log_is_refused_at_its_line(default_run,
     shutil.copy(sidecars.map_path(default_run.log_path), sidecars.map_path(path))
     with pytest.raises(LogFormatError, match=r"mixed.log:7: a landmark observation \(flag 2\) in a log of \d+ scans"):
         load_run(path)
+
+
+def test_without_truth_the_reference_is_corner_fastslam_whatever_the_map_kind(default_run):
+    """calibrate measures corner noises against corner FastSLAM's landmarks: a config whose [map] kind
+    is grid (configs/course.toml, configs/carmen.toml) gives the same settings as the landmark one."""
+    from mazeslam.calibration.noise import calibrate
+    from mazeslam.core.config import with_settings
+    from mazeslam.pipeline import SlamConfig
+
+    run = dataclasses.replace(load_run(default_run.log_path), truth=None)
+    landmarks = SlamConfig(fastslam=dataclasses.replace(SlamConfig().fastslam, NPARTICLES=20))
+    grid = with_settings(landmarks, {"map.kind": "grid"})
+    assert calibrate(run, grid).settings() == calibrate(run, landmarks).settings()
