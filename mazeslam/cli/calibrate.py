@@ -3,7 +3,6 @@ filter settings, over one log or several together."""
 
 from __future__ import annotations
 
-import dataclasses
 from pathlib import Path
 
 import click
@@ -41,9 +40,7 @@ def calibrate(log_files, config_path, write_path, first_beam_angle, beam_directi
     if write_path:
         prepare_output_file(write_path)
     config = load_slam_config(config_path)
-    config = dataclasses.replace(
-        config, sensor=geometry_overrides(first_beam_angle, beam_direction, mount_x).over(config.sensor)
-    )
+    config = config.with_sensor(geometry_overrides(first_beam_angle, beam_direction, mount_x))
     runs = [with_detected_convention(load_run(log_file, config.sensor), config) for log_file in log_files]
     try:
         lines = calibrate_logs(runs, config, progress=not quiet).settings()

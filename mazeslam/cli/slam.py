@@ -167,7 +167,7 @@ def run_slam_command(
     changes = {"map.kind": map_kind, **{f"fastslam.{name}": value for name, value in filter_changes.items()}}
     changes.update({"grid.particles": filter_changes.get("NPARTICLES"), "grid.seed": filter_changes.get("seed")})
     config = with_settings(config, changes)
-    config = dataclasses.replace(config, sensor=(sensor or SensorOverrides()).over(config.sensor))
+    config = config.with_sensor(sensor)
     run = load_run(log_file, config.sensor)
     run = with_detected_convention(run, config, cache_folder=Path(out_dir))
     notes = [note for note in [_given_convention_warning(run, config), _blind_motion_note(run, config)] if note]

@@ -94,7 +94,7 @@ def run_smooth_command(
     last run's files once all are written: ``staged_outputs``); return the lines to print.
     ``association``: "known" (the truth's corners) or "from-run" (``run_dir``'s map)."""
     config = load_slam_config(config_path)
-    config = dataclasses.replace(config, sensor=(sensor or SensorOverrides()).over(config.sensor))
+    config = config.with_sensor(sensor)
     run = load_run(log_file, config.sensor)
     run = with_detected_convention(run, config, cache_folder=Path(out_dir))
     radius = config.evaluation.match_radius

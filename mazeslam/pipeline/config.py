@@ -88,6 +88,11 @@ class SlamConfig:
         """The particle count of the filter ``[map] kind`` names."""
         return self.fastslam.NPARTICLES if self.map.kind == MapKind.LANDMARKS else self.grid.particles
 
+    def with_sensor(self, overrides: SensorOverrides | None) -> SlamConfig:
+        """These settings with the ``[sensor]`` values ``overrides`` gives (command-line beam geometry)
+        over the config's; None keeps them."""
+        return self if overrides is None else replace(self, sensor=overrides.over(self.sensor))
+
     def with_seed(self, seed: int) -> SlamConfig:
         """These settings with both filters' random draws seeded by ``seed``."""
         return replace(self, fastslam=replace(self.fastslam, seed=seed), grid=replace(self.grid, seed=seed))

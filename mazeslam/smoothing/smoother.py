@@ -422,7 +422,7 @@ def smooth_known_association(
     """The MAP estimate of a scan log with known association.
 
     Extracts the corners of every scan with ``extractor``, names them with
-    ``identify(record_index, observations (K, 2)) -> ids (K,)`` (as ``mazeslam.pipeline.truth_identities``
+    ``identify(record_index, observations (K, 2)) -> ids (K,)`` (as ``mazeslam.fastslam.identities.truth_identities``
     returns; -1: left out), and solves.
     """
     observations, covariances, ids = [], [], []
