@@ -53,10 +53,13 @@ from mazeslam.data import log
 def simulate(out, seed, maze, rows, cols, duration, beams, config_path, commands_path, plot_path, quiet):
     """Drive the simulated e-puck through a maze and write a course log with truth and map sidecars."""
     from mazeslam.sim.policies import load_commands
-    from mazeslam.sim.simulator import load_config
+    from mazeslam.sim.simulator import load_config, too_short_problem
     from mazeslam.sim.simulator import simulate as run_simulation
 
     config = _with_overrides(load_config(config_path), rows=rows, cols=cols, beams=beams)
+    too_short = None if duration is None else too_short_problem(duration, config.logger)
+    if too_short:  # refused before any file is written
+        raise click.BadParameter(too_short, param_hint="'--duration'")
     policy = load_commands(commands_path) if commands_path else None
     prepare_output_file(out)
     if plot_path:

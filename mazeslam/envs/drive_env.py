@@ -23,7 +23,8 @@ class DriveEnv(gym.Env):
     | ``"wheels"``    | left wheel speed / top wheel speed | right wheel speed / top wheel speed                 |
 
     A velocity command that would drive a wheel past its top speed is scaled down as a whole
-    (the path's curvature is kept).
+    (the path's curvature is kept). An action of another shape, or with a NaN or infinite value (a
+    diverging policy), is refused with a ``ValueError`` naming the action and the space.
 
     ## Observation space
     ``Dict``:
@@ -80,7 +81,7 @@ class DriveEnv(gym.Env):
         """Count a step and turn its action into (left, right) wheel speeds, m/s."""
         if self.steps is None:
             raise RuntimeError("call reset() before step()")
-        first, second = (min(max(float(action[k]), -1.0), 1.0) for k in (0, 1))
+        first, second = (min(max(value, -1.0), 1.0) for value in checked_actions(action, self.action_space).tolist())
         self.steps += 1
         robot = self.config.robot
         if self.action_type == "wheels":
@@ -90,3 +91,36 @@ class DriveEnv(gym.Env):
     def _observation(self, distance: float = 0.0, turn: float = 0.0) -> dict:
         """The observation: ``last_scan`` and the odometry increment (m, rad)."""
         return {"scan": self.last_scan, "odometry": np.array([distance, turn], dtype=np.float32)}
+
+
+def checked_actions(actions, space: spaces.Space, name: str = "action") -> np.ndarray:
+    """``actions`` as a float64 array of ``space``'s shape, every value finite; a ``ValueError``
+    naming them and the space otherwise (a NaN would otherwise reach the physics and the ray cast).
+    Finite values outside ``space``'s bounds are kept: the envs clip them."""
+    try:
+        values = np.asarray(actions, dtype=np.float64)
+    except (TypeError, ValueError) as error:
+        raise ValueError(f"{name} {_shown(actions)} is not an array of numbers: the action space is {space}") from error
+    if values.shape != space.shape:
+        raise ValueError(
+            f"{name} of shape {values.shape} does not fit the action space {space}: it takes shape {space.shape}"
+        )
+    finite = np.isfinite(values)
+    if not finite.all():
+        if values.ndim == 2:  # a vector env's actions: name the envs
+            rows = np.flatnonzero(~finite.all(axis=1))
+            envs = ", ".join(map(str, rows[:10])) + (", ..." if len(rows) > 10 else "")
+            what = f"{name} of env{'s' if len(rows) > 1 else ''} {envs}, {_shown(values[rows[:3]].tolist())}, have"
+        else:
+            what = f"{name} {_shown(values.tolist())} has"
+        raise ValueError(
+            f"{what} a NaN or infinite value: actions must be finite, in {space} "
+            f"(finite values outside its bounds are clipped)"
+        )
+    return values
+
+
+def _shown(value, limit: int = 80) -> str:
+    """``repr(value)``, cut to ``limit`` characters."""
+    text = repr(value)
+    return text if len(text) <= limit else text[: limit - 3] + "..."

@@ -3,11 +3,14 @@
 from __future__ import annotations
 
 import math
+import os
+from numbers import Integral, Real
 
 import gymnasium as gym
 import numpy as np
 
 from mazeslam.core.geometry import transform_points
+from mazeslam.core.limits import maze_problem
 from mazeslam.envs.drive_env import DriveEnv
 from mazeslam.robot.simulated import SimulatedRobot
 from mazeslam.sim.maze import Maze, generate_maze, load_maze
@@ -16,6 +19,8 @@ from mazeslam.sim.walls import WallsInSight
 
 #: Spacing (m) of the points along the walls that count as seen once a beam lands near them.
 WALL_SAMPLE_SPACING = 0.01
+#: The keys ``reset(options=...)`` takes (the vector env takes ``reset_mask`` too).
+RESET_OPTIONS = ("maze", "rows", "cols", "loop_fraction", "start_cell", "start_heading")
 
 
 class MazeEnv(DriveEnv):
@@ -36,7 +41,10 @@ class MazeEnv(DriveEnv):
     between any two cells; unlike ``mazeslam simulate``, whose random mazes have 15 % of their inner
     walls removed for loops: pass ``loop_fraction=0.15`` for those), or a given ``Maze`` / maze file;
     the robot at the centre of a random cell with a random heading. ``reset(options=...)`` may
-    override ``maze``, ``rows``, ``cols``, ``loop_fraction``, ``start_cell`` and ``start_heading``.
+    override ``maze``, ``rows``, ``cols``, ``loop_fraction``, ``start_cell`` ((row, col) of a cell
+    of the maze) and ``start_heading`` (rad); another key, or a value out of its range, is refused
+    with a ``ValueError`` naming the option and its valid range. A maze has at most
+    ``mazeslam.core.limits.MAX_MAZE_CELLS`` cells.
 
     ## Episode end
     Terminated when every cell has been visited. Truncated by Gymnasium's ``TimeLimit``: the
@@ -77,6 +85,13 @@ class MazeEnv(DriveEnv):
         if render_mode is not None and render_mode not in self.metadata["render_modes"]:
             raise ValueError(f"render_mode must be one of {self.metadata['render_modes']} or None, got {render_mode!r}")
         super().__init__(config, max_steps or 1, control_period, action_type)  # checks the settings
+        check_maze_settings(
+            rows,
+            cols,
+            maze,
+            loop_fraction,
+            {"wall_reward": wall_reward, "cell_reward": cell_reward, "collision_penalty": collision_penalty},
+        )
         self.max_steps: int | None = max_steps  # type: ignore[assignment]  # None: TimeLimit truncates
         self.render_mode = render_mode
         self.rows, self.cols, self.maze_option, self.loop_fraction = rows, cols, maze, loop_fraction
@@ -87,8 +102,8 @@ class MazeEnv(DriveEnv):
 
     # -- episode ------------------------------------------------------------------------------
     def reset(self, *, seed: int | None = None, options: dict | None = None):
+        options = episode_options(options, self.maze_option, self.rows, self.cols, self.loop_fraction)
         super().reset(seed=seed)
-        options = options or {}
         self.steps, self.time = 0, 0.0
         maze = choose_maze(
             options, self.maze_option, self.rows, self.cols, self.loop_fraction, self.config.maze, self.np_random
@@ -190,6 +205,99 @@ class MazeEnv(DriveEnv):
             self._figure = None
 
 
+def check_maze_settings(rows, cols, maze, loop_fraction, rewards: dict[str, float]) -> None:
+    """The env's settings of its mazes and rewards, checked: a ``ValueError`` naming the one out of
+    its range (a NaN reward would make every reward NaN; a huge maze would take minutes and
+    gigabytes per reset)."""
+    _check_maze_size(rows, cols, "rows", "cols")
+    _check_loop_fraction(loop_fraction, "loop_fraction")
+    _check_maze_choice(maze, "maze")
+    for name, value in rewards.items():
+        if not (isinstance(value, Real) and math.isfinite(value)):
+            raise ValueError(f"{name} must be a finite number, got {value!r}")
+
+
+def episode_options(options: dict | None, default: Maze | str | None, rows: int, cols: int, loop_fraction: float):
+    """``reset``'s ``options`` checked and completed, before the env changes anything: ``maze`` (a
+    ``Maze``, a maze file read here, or "random"), ``rows``, ``cols`` and ``loop_fraction`` (of a
+    random maze; the env's unless given), and ``start_cell`` (row, col) and ``start_heading`` (rad)
+    if given. A ``ValueError`` naming the option and its valid range otherwise."""
+    options = dict(options or {})
+    unknown = [key for key in options if key not in RESET_OPTIONS]
+    if unknown:
+        raise ValueError(
+            f"unknown reset option{'s' if len(unknown) > 1 else ''} {', '.join(repr(key) for key in unknown)}: "
+            f"mazeslam/Maze-v0 takes {', '.join(RESET_OPTIONS)}"
+        )
+    checked: dict = {
+        "rows": options.get("rows", rows),
+        "cols": options.get("cols", cols),
+        "loop_fraction": options.get("loop_fraction", loop_fraction),
+    }
+    choice = _check_maze_choice(options.get("maze", default), "options['maze']" if "maze" in options else "maze")
+    if choice is None or str(choice) == "random":
+        _check_maze_size(checked["rows"], checked["cols"], "options['rows']", "options['cols']")
+        _check_loop_fraction(checked["loop_fraction"], "options['loop_fraction']")
+        checked["maze"] = "random"
+        maze_rows, maze_cols = checked["rows"], checked["cols"]
+    else:
+        maze = choice if isinstance(choice, Maze) else load_maze(choice)
+        checked["maze"] = maze
+        maze_rows, maze_cols = maze.rows, maze.cols
+    if "start_cell" in options:
+        checked["start_cell"] = _check_start_cell(options["start_cell"], maze_rows, maze_cols)
+    if "start_heading" in options:
+        heading = options["start_heading"]
+        if isinstance(heading, bool) or not (isinstance(heading, Real) and math.isfinite(heading)):
+            raise ValueError(f"options['start_heading'] must be a finite number of radians, got {heading!r}")
+        checked["start_heading"] = float(heading)
+    return checked
+
+
+def _check_maze_size(rows, cols, row_name: str, col_name: str) -> None:
+    for name, value in ((row_name, rows), (col_name, cols)):
+        if isinstance(value, bool) or not isinstance(value, Integral) or value < 1:
+            raise ValueError(f"{name} must be a whole number of cells, at least 1, got {value!r}")
+    too_big = maze_problem(int(rows), int(cols))
+    if too_big:
+        raise ValueError(f"{row_name} x {col_name}: {too_big}")
+
+
+def _check_loop_fraction(value, name: str) -> None:
+    if isinstance(value, bool) or not (isinstance(value, Real) and 0 <= float(value) <= 1):
+        raise ValueError(f"{name} must be a number in [0, 1], got {value!r}")
+
+
+def _check_maze_choice(choice, name: str):
+    """``choice`` if it names a maze (a ``Maze`` of at most ``MAX_MAZE_CELLS`` cells, a file,
+    "random" or None); a ``ValueError`` naming ``name`` otherwise."""
+    if isinstance(choice, Maze):
+        too_big = maze_problem(choice.rows, choice.cols)
+        if too_big:
+            raise ValueError(f"{name}: {too_big}")
+    elif choice is not None and not isinstance(choice, (str, os.PathLike)):
+        raise ValueError(f"{name} must be a Maze, a maze file or 'random', got {type(choice).__name__}")
+    return choice
+
+
+def _check_start_cell(value, rows: int, cols: int) -> tuple[int, int]:
+    """``options["start_cell"]`` as (row, col), a cell of a ``rows`` x ``cols`` maze."""
+    valid = (
+        isinstance(value, (tuple, list, np.ndarray))
+        and len(value) == 2
+        and all(isinstance(v, Integral) and not isinstance(v, bool) for v in value)
+        and 0 <= value[0] < rows
+        and 0 <= value[1] < cols
+    )
+    if not valid:
+        shown = value.tolist() if isinstance(value, np.ndarray) else value
+        raise ValueError(
+            f"options['start_cell'] must be (row, col) of a cell of the {rows} x {cols} maze, "
+            f"0 <= row < {rows} and 0 <= col < {cols}, got {shown!r}"
+        )
+    return int(value[0]), int(value[1])
+
+
 def choose_maze(
     options: dict,
     default: Maze | str | None,
@@ -220,7 +328,9 @@ def choose_maze(
 def draw_start_pose(maze: Maze, options: dict, rng: np.random.Generator) -> np.ndarray:
     """The start pose (x m, y m, theta rad): the centre of ``options["start_cell"]`` or of a random
     cell, facing ``options["start_heading"]`` or a random heading, drawn from ``rng``."""
-    start_cell = tuple(options.get("start_cell", (int(rng.integers(maze.rows)), int(rng.integers(maze.cols)))))
+    start_cell = (int(rng.integers(maze.rows)), int(rng.integers(maze.cols)))  # drawn even if given
+    if "start_cell" in options:
+        start_cell = _check_start_cell(options["start_cell"], maze.rows, maze.cols)
     heading = float(options.get("start_heading", rng.uniform(-math.pi, math.pi)))
     return np.array([*maze.cell_center(*start_cell), heading])
 

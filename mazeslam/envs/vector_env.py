@@ -22,8 +22,14 @@ from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space
 
 from mazeslam.core.geometry import wrap_angle
-from mazeslam.envs.drive_env import DriveEnv
-from mazeslam.envs.maze_env import WALL_SAMPLE_SPACING, choose_maze, draw_start_pose
+from mazeslam.envs.drive_env import DriveEnv, checked_actions
+from mazeslam.envs.maze_env import (
+    WALL_SAMPLE_SPACING,
+    check_maze_settings,
+    choose_maze,
+    draw_start_pose,
+    episode_options,
+)
 from mazeslam.sim.batched import MazeGrids, slide
 from mazeslam.sim.maze import Maze
 from mazeslam.sim.simulator import SimulationConfig
@@ -81,6 +87,13 @@ class MazeVectorEnv(VectorEnv):
         if render_mode is not None and render_mode not in self.metadata["render_modes"]:
             raise ValueError(f"render_mode must be one of {self.metadata['render_modes']} or None, got {render_mode!r}")
         single = DriveEnv(config, max_steps, control_period, action_type)  # checks them; the single spaces
+        check_maze_settings(
+            rows,
+            cols,
+            maze,
+            loop_fraction,
+            {"wall_reward": wall_reward, "cell_reward": cell_reward, "collision_penalty": collision_penalty},
+        )
         self.num_envs, self.render_mode, self.render_envs = num_envs, render_mode, tuple(render_envs)
         self.config, self.max_steps, self.action_type = single.config, max_steps, action_type
         self.top_turn_rate = single.top_turn_rate
@@ -120,13 +133,23 @@ class MazeVectorEnv(VectorEnv):
         mask = options.pop("reset_mask", None)
         envs = np.arange(self.num_envs) if mask is None else np.flatnonzero(_check_mask(mask, self.num_envs))
         seeds = _env_seeds(seed, self.num_envs)
+        # Every option checked (a maze file read once) before any env changes.
+        options = episode_options(options, self.maze_option, self.rows, self.cols, self.loop_fraction)
+        if len(envs) < self.num_envs:
+            if self.grids is None:
+                raise ValueError("the first reset() must reset every env: options['reset_mask'] must be all True")
+            if not self._fits(options):
+                raise ValueError("a maze of another shape needs a reset of every env (no options['reset_mask'])")
         self._reset_envs(envs, [seeds[e] for e in envs], options)
         _, scan_noise, dropouts = self._draw(envs)
         self._observe(envs, scan_noise, dropouts)
         return self._observation(np.zeros((self.num_envs, 2))), self._infos(envs)
 
     def step(self, actions):
-        actions = np.minimum(np.maximum(np.asarray(actions, dtype=float).reshape(self.num_envs, 2), -1.0), 1.0)
+        if self.grids is None:
+            raise RuntimeError("MazeVectorEnv: call reset() before step()")
+        actions = checked_actions(actions, self.action_space, "actions")
+        actions = np.minimum(np.maximum(actions, -1.0), 1.0)
         resetting = self._autoreset.copy()
         if resetting.any():
             self._reset_envs(np.flatnonzero(resetting), [None] * int(resetting.sum()), {})
@@ -178,6 +201,18 @@ class MazeVectorEnv(VectorEnv):
         self._mark_visited(envs)
         for array in (self.steps, self.time, self._commanded, self._reported, self._collision, self._autoreset):
             array[envs] = 0
+
+    def _fits(self, options: dict) -> bool:
+        """Whether the mazes of checked reset ``options`` (``episode_options``) have the grids' shape."""
+        grids, maze = self._grids(), options["maze"]
+        if isinstance(maze, Maze):
+            return grids.fits(maze)
+        shape = (2 * options["rows"] + 1, 2 * options["cols"] + 1)
+        params = self.config.maze
+        return grids.solid.shape[1:] == shape and (params.cell_size, params.wall_thickness) == (
+            grids.cell_size,
+            grids.thickness,
+        )
 
     def _grids(self) -> MazeGrids:
         """The mazes' grids, made by the first reset (of every env)."""

@@ -549,7 +549,9 @@ class _BandCrossings:
                 best[:, active] = np.where(nearer, found, best[:, active])
                 crossing[:, active] = np.where(nearer, lane, crossing[:, active])
             limit = (last * spacing + t0 + spacing).min(axis=0)  # nearest crossing not looked at
-            done = (found.min(axis=0) < limit) | (limit > max_range)
+            # Done once a hit is nearer, or past the range; a NaN ray (a NaN pose) never gets
+            # nearer, so it counts as done too, and is left to ``missed`` (never a hang).
+            done = (found.min(axis=0) < limit) | ~(limit <= max_range)
             if done.all():
                 break
             keep = ~done

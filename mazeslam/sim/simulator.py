@@ -15,6 +15,7 @@ counting the log's records from 0 (as the truth sidecar's rows).
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -116,6 +117,30 @@ class SimulationConfig:
         )
 
 
+def first_scan_time(logger: LoggerParams) -> float:
+    """Seconds into a run at which ``simulate`` takes its first scan: the physics step at or after
+    ``scan_period + scan_phase``."""
+    return _first_scan_step(logger) * (1.0 / logger.physics_rate)
+
+
+def _first_scan_step(logger: LoggerParams) -> int:
+    """The physics step (1, 2, ...) ending with the first scan, in ``simulate``'s arithmetic."""
+    dt = 1.0 / logger.physics_rate
+    return max(1, math.ceil(logger.scan_period / dt + logger.scan_phase / dt - 1e-6))
+
+
+def too_short_problem(seconds: float, logger: LoggerParams) -> str | None:
+    """Why a run of ``seconds`` would write no scan (a log without scans maps nothing), or None."""
+    if (_first_scan_step(logger) - 1) * (1.0 / logger.physics_rate) < seconds - 1e-9:  # ``simulate``'s loop
+        return None
+    first = first_scan_time(logger)
+    phase = f" + scan_phase {logger.scan_phase:g} s" if logger.scan_phase else ""
+    return (
+        f"{seconds:g} s is too short for one scan: the first is taken at {first:.6g} s "
+        f"(logger scan_period {logger.scan_period:g} s{phase}); at least {first:.6g} s"
+    )
+
+
 def load_config(path: str | Path | None) -> SimulationConfig:
     """The simulator configuration from a TOML file, or the defaults when ``path`` is None."""
     return SimulationConfig() if path is None else load_toml(SimulationConfig, path)
@@ -156,7 +181,8 @@ def simulate(
         seed: seeds every random draw (maze, driving, slip, laser noise); the same seed and
             parameters give the same bytes.
         duration: seconds to simulate; None runs until the exploration tour is complete (bounded
-            by ``config.max_duration``).
+            by ``config.max_duration``). At least one scan's time (``first_scan_time``): a
+            shorter run is refused before any file is written.
         policy: a callable ``(t, pose) -> (speed, turn_rate)``; default: the maze explorer.
         progress: show a progress bar on a terminal.
     """
@@ -165,6 +191,8 @@ def simulate(
         require(duration > 0, f"duration must be positive, got {duration}")
         too_long = duration_problem(duration)
         require(too_long is None, f"duration: {too_long}")
+    too_short = too_short_problem(duration if duration is not None else config.max_duration, config.logger)
+    require(too_short is None, f"{'duration' if duration is not None else 'max_duration'}: {too_short}")
     maze_rng, drive_rng, slip_rng, laser_rng, glitch_rng = (
         np.random.default_rng(s) for s in np.random.SeedSequence(seed).spawn(5)
     )
@@ -193,7 +221,7 @@ def simulate(
         desc=f"simulate {out.name}",
     )
     with LogWriter(out, config.laser.beams) as writer:
-        step = 0
+        step, scans = 0, 0
         next_odometry, next_scan = steps_per_odometry, steps_per_scan + logger.scan_phase / dt
         while step * dt < end_time - 1e-9 and (duration is not None or not policy.done):
             speed, turn_rate = policy(step * dt, world.pose)
@@ -215,11 +243,18 @@ def simulate(
             if scan_due:
                 next_scan += steps_per_scan
                 writer.write_scan(t, laser.scan(world.pose, laser_rng))
+                scans += 1
                 record_times.append(t)
                 record_poses.append(world.pose)
             if step % round(logger.physics_rate) == 0:
                 bar.update(1)
     bar.close()
+    if not scans:  # the policy finished before the first scan: a log without scans maps nothing
+        out.unlink(missing_ok=True)
+        raise ValueError(
+            f"the policy finished at {step * dt:g} s, before the first scan at {first_scan_time(logger):g} s: "
+            f"nothing written; give a duration of at least {first_scan_time(logger):g} s, or a longer policy"
+        )
     times, poses = np.array(record_times), np.array(record_poses).reshape(-1, 3)
     truth_file, map_file = sidecars.truth_path(out), sidecars.map_path(out)
     sidecars.write_truth(truth_file, times, poses)
