@@ -75,7 +75,7 @@ def test_a_child_ends_when_its_parent_is_killed(watch):
 
         def child(parent, main_thread):
             end_with_parent(parent, main_thread)
-            os.write(1, f"{os.getpid()}\\n".encode())  # one write: two workers share the pipe
+            os.write(1, f"{{os.getpid()}}\\n".encode())  # one write, as in the test below
             time.sleep(60)
 
         if __name__ == "__main__":
