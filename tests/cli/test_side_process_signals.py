@@ -12,10 +12,10 @@ import subprocess
 import sys
 import textwrap
 import time
-from pathlib import Path
 
 import pytest
 from conftest import PROJECT_ROOT
+from processes import children, ended_within, kill_all, running
 
 pytestmark = pytest.mark.skipif(not sys.platform.startswith("linux"), reason="the side process forks (Linux)")
 
@@ -24,46 +24,6 @@ pytestmark = pytest.mark.skipif(not sys.platform.startswith("linux"), reason="th
 GRACE = 5.0
 #: Particles enough for the filter to run for seconds: the command is signalled mid-run.
 PARTICLES = "3000"
-
-
-def running(pid: int) -> bool:
-    """Whether process ``pid`` exists and is not a zombie."""
-    try:
-        stat = Path(f"/proc/{pid}/stat").read_text()
-    except OSError:
-        return False
-    return stat.rsplit(")", 1)[1].split()[0] != "Z"
-
-
-def children(pid: int) -> list[int]:
-    """The running processes whose parent is ``pid``."""
-    found = []
-    for entry in Path("/proc").iterdir():
-        if entry.name.isdigit():
-            try:
-                fields = (entry / "stat").read_text().rsplit(")", 1)[1].split()
-            except OSError:  # ended meanwhile
-                continue
-            if int(fields[1]) == pid and fields[0] != "Z":
-                found.append(int(entry.name))
-    return found
-
-
-def ended_within(pids, seconds: float) -> bool:
-    """Whether every one of ``pids`` has ended within ``seconds``."""
-    deadline = time.monotonic() + seconds
-    while any(running(pid) for pid in pids):
-        if time.monotonic() > deadline:
-            return False
-        time.sleep(0.02)
-    return True
-
-
-def kill_all(pids) -> None:
-    """Clean-up after a failed test: no process of it left behind."""
-    for pid in pids:
-        if running(pid):
-            os.kill(pid, signal.SIGKILL)
 
 
 def slam_with_its_side_process(log_path, out) -> tuple[subprocess.Popen, int]:

@@ -6,16 +6,14 @@ workers at once instead of waiting for the calls they are running.
 Processes are checked in ``/proc`` (Linux): a process is running while it exists and is not a
 zombie (a dead orphan waits there for its new parent to collect it)."""
 
-import os
-import signal
 import subprocess
 import sys
 import textwrap
 import time
-from pathlib import Path
 
 import pytest
 from conftest import PROJECT_ROOT
+from processes import ended_within, kill_all, running
 
 from mazeslam.sweeps.runner import _local_pool
 
@@ -24,32 +22,6 @@ pytestmark = pytest.mark.skipif(not sys.platform.startswith("linux"), reason="pr
 #: Seconds a killed parent's children have to end (about 0.3 s on a quiet machine, at most the
 #: polling thread's 0.25 s after the kernel's signal; generous for a loaded CI machine).
 GRACE = 5.0
-
-
-def running(pid: int) -> bool:
-    """Whether process ``pid`` exists and is not a zombie."""
-    try:
-        stat = Path(f"/proc/{pid}/stat").read_text()
-    except OSError:
-        return False
-    return stat.rsplit(")", 1)[1].split()[0] != "Z"
-
-
-def ended_within(pids, seconds: float) -> bool:
-    """Whether every one of ``pids`` has ended within ``seconds``."""
-    deadline = time.monotonic() + seconds
-    while any(running(pid) for pid in pids):
-        if time.monotonic() > deadline:
-            return False
-        time.sleep(0.02)
-    return True
-
-
-def kill_all(pids) -> None:
-    """Clean-up after a failed test: no process of it left behind."""
-    for pid in pids:
-        if running(pid):
-            os.kill(pid, signal.SIGKILL)
 
 
 def start_script(code: str) -> subprocess.Popen:

@@ -6,7 +6,6 @@ Processes are checked in ``/proc`` (Linux): a process is running while it exists
 zombie (a dead orphan waits there for its new parent to collect it)."""
 
 import json
-import os
 import signal
 import subprocess
 import sys
@@ -16,6 +15,7 @@ from pathlib import Path
 import pandas as pd
 import pytest
 from conftest import PROJECT_ROOT
+from processes import children, ended_within, kill_all
 
 from mazeslam.sweeps.runner import RESULTS, SweepLock
 
@@ -32,46 +32,6 @@ duration = 30.0
 "sim.laser.beams" = [90]
 """
 RUNS = 12
-
-
-def running(pid: int) -> bool:
-    """Whether process ``pid`` exists and is not a zombie."""
-    try:
-        stat = Path(f"/proc/{pid}/stat").read_text()
-    except OSError:
-        return False
-    return stat.rsplit(")", 1)[1].split()[0] != "Z"
-
-
-def children(pid: int) -> list[int]:
-    """The running processes whose parent is ``pid``."""
-    found = []
-    for entry in Path("/proc").iterdir():
-        if entry.name.isdigit():
-            try:
-                fields = (entry / "stat").read_text().rsplit(")", 1)[1].split()
-            except OSError:  # ended meanwhile
-                continue
-            if int(fields[1]) == pid and fields[0] != "Z":
-                found.append(int(entry.name))
-    return found
-
-
-def ended_within(pids, seconds: float) -> bool:
-    """Whether every one of ``pids`` has ended within ``seconds``."""
-    deadline = time.monotonic() + seconds
-    while any(running(pid) for pid in pids):
-        if time.monotonic() > deadline:
-            return False
-        time.sleep(0.02)
-    return True
-
-
-def kill_all(pids) -> None:
-    """Clean-up after a failed test: no process of it left behind."""
-    for pid in pids:
-        if running(pid):
-            os.kill(pid, signal.SIGKILL)
 
 
 def sweep_command(folder: Path) -> list[str]:
