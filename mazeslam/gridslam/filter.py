@@ -39,7 +39,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from mazeslam.core.beams import BeamGeometry
-from mazeslam.core.config import require
+from mazeslam.core.config import check_setting, require
 from mazeslam.core.geometry import advance_pose, compose, relative, transform_points, wrap_angle
 from mazeslam.core.motion import OdometryNoise, dead_reckoning, predict_relative
 from mazeslam.core.resampling import effective_sample_size, normalized_weights, systematic_resample
@@ -128,8 +128,8 @@ class GridSlamParams:
         object.__setattr__(self, "rescue_sigma", tuple(self.rescue_sigma))
         object.__setattr__(self, "every_scan_sigma", tuple(self.every_scan_sigma))
         require(self.particles >= 1, "particles must be at least 1")
-        object.__setattr__(self, "search", _member(SearchMode, self.search, "search"))
-        object.__setattr__(self, "motion", _member(MotionSource, self.motion, "motion"))
+        object.__setattr__(self, "search", check_setting(SearchMode, "search", self.search, "GridSlamParams"))
+        object.__setattr__(self, "motion", check_setting(MotionSource, "motion", self.motion, "GridSlamParams"))
         for name in ("rescue_sigma", "every_scan_sigma"):
             value = getattr(self, name)
             require(len(value) == 2 and all(v > 0 for v in value), f"{name}: 2 positive values (m, rad), got {value}")
@@ -153,15 +153,6 @@ class GridSlamParams:
     def motion_covariance(self, motion: np.ndarray) -> np.ndarray:
         """Covariance (3, 3) of a motion ``(dx, dy, dtheta)`` between processed scans."""
         return self.motion_noise.relative_covariance(motion) + self.motion_floor**2 * np.eye(3)
-
-
-def _member(kind: type[enum.Enum], value, name: str):
-    """``value`` as a member of the Enum ``kind``; a ValueError naming the setting and its choices."""
-    try:
-        return kind(value)
-    except ValueError:
-        choices = ", ".join(repr(member.value) for member in kind)
-        raise ValueError(f"{name} must be one of {choices}, got {value!r}") from None
 
 
 def _window_covariance(sigma: tuple) -> np.ndarray:

@@ -82,7 +82,9 @@ def test_run_grid_slam_searches_every_scan_when_told_to(monkeypatch, search, sea
 
 
 def test_bad_search_settings_are_named():
-    with pytest.raises(ValueError, match="search must be one of 'failed-match', 'every-scan', got 'always'"):
+    with pytest.raises(
+        ValueError, match="GridSlamParams: search = 'always': must be one of 'failed-match', 'every-scan'"
+    ):
         GridSlamParams(search="always")
     with pytest.raises(ValueError, match=r"every_scan_sigma: 2 positive values \(m, rad\)"):
         GridSlamParams(every_scan_sigma=(0.4, 0.0))
