@@ -6,7 +6,6 @@ from __future__ import annotations
 from pathlib import Path
 
 import click
-import numpy as np
 
 from mazeslam.cli.options import FINITE
 from mazeslam.data import log
@@ -44,10 +43,8 @@ def info(log_file, lenient, detect_beams, config_path, mount_x):
         f"in all (net {facts['net_rotation_rad']:+.3f} rad)"
     )
     if facts["odometry_records"]:
-        steps = np.abs(course_log.increments[:, 0])
-        longest = int(np.argmax(steps))
-        line = f" (line {course_log.line_numbers[longest]})" if course_log.line_numbers is not None else ""
-        click.echo(f"  longest step      {steps[longest]:.3f} m{line}")
+        longest, metres = course_log.longest_step()
+        click.echo(f"  longest step      {metres:.3f} m ({course_log.line_of(longest)})")
     if facts["scan_records"]:
         click.echo(
             f"  ranges            max {facts['max_range_m']:.3f} m, {100 * facts['no_return_fraction']:.1f} % no return"

@@ -169,6 +169,18 @@ class CourseLog:
             else:
                 yield LandmarkRecord(index, float(t), int(row[0]), float(row[1]), float(row[2]))
 
+    def longest_step(self, left_out=()) -> tuple[int, float]:
+        """The record whose odometry travels farthest (its index) and how far (m), the records
+        ``left_out`` (indices, e.g. glitches) aside; (0, 0.0) for a log without motion."""
+        steps = np.abs(self.increments[:, 0])
+        steps[np.asarray(left_out, dtype=int)] = 0.0
+        index = int(np.argmax(steps)) if len(steps) else 0
+        return index, float(steps[index]) if len(steps) else 0.0
+
+    def line_of(self, index: int) -> str:
+        """Where record ``index`` is, for messages: ``"line N"`` of its file, else ``"record N"``."""
+        return f"line {self.line_numbers[index]}" if self.line_numbers is not None else f"record {index}"
+
     def without_motion(self, records) -> CourseLog:
         """This log with the odometry of ``records`` (indices) set to no motion."""
         values = self.values.copy()

@@ -9,7 +9,6 @@ import numpy as np
 from mazeslam.core.limits import grid_map_problem
 from mazeslam.core.motion import dead_reckoning
 from mazeslam.data.loaded_run import LoadedRun
-from mazeslam.data.log import CourseLog
 from mazeslam.gridslam.filter import GridSlamParams, run_grid_slam
 from mazeslam.pipeline.config import MapKind, SlamConfig
 from mazeslam.pipeline.result import SlamResult
@@ -36,7 +35,9 @@ def grid_on_run(
     tolerance = config.odometry.jump_tolerance
     moved_by = run.log_with_glitch_pairs_summed(tolerance)
     params = grid_params(config)
-    _check_mappable(run, moved_by, params)
+    glitches = run.glitches(tolerance)
+    reckoned = dead_reckoning(run.log, run.start_pose, glitches)
+    _check_mappable(run, reckoned, glitches, params)
     grid_run = run_grid_slam(
         moved_by, run.geometry, run.start_pose, params, progress, snapshot_every, run.sensor_max_range, on_update
     )
@@ -50,7 +51,7 @@ def grid_on_run(
         best_poses=grid_run.record_trajectory(which="best")[0],
         pose_covariances=covariances,
         estimated_records=grid_run.scan_records,
-        dead_reckoning=dead_reckoning(run.log, run.start_pose, run.glitches(tolerance)),
+        dead_reckoning=reckoned,
         step_seconds=seconds,
         grid=grid_run.grid,
         nis=grid_run.nis[np.isfinite(grid_run.nis)],
@@ -63,12 +64,13 @@ def grid_on_run(
     )
 
 
-def _check_mappable(run: LoadedRun, moved_by: CourseLog, params: GridSlamParams) -> None:
+def _check_mappable(run: LoadedRun, reckoned: np.ndarray, glitches: np.ndarray, params: GridSlamParams) -> None:
     """Refuse, in words, a log the grid filter cannot map: one without scans, one whose scans have no
-    return the grid uses (``[grid.grid] min_range``, ``max_range``), or one whose odometry (``moved_by``,
-    glitches handled as the filter does) spans a map too big to hold (``limits.grid_map_problem``)."""
-    grid = params.grid
-    scans = moved_by.values[moved_by.is_scan] if moved_by.n_beams else np.empty((0, 0))
+    return the grid uses (``[grid.grid] min_range``, ``max_range``), or one whose odometry
+    (``reckoned`` (R, 3), the ``glitches`` (indices) left out) spans a map too big to hold
+    (``limits.grid_map_problem``)."""
+    grid, course_log = params.grid, run.log
+    scans = course_log.values[course_log.is_scan] if course_log.n_beams else np.empty((0, 0))
     if not len(scans):
         raise ValueError(
             f'{run.path}: no scan records: the grid filter ([map] kind = "grid") maps laser scans; '
@@ -79,14 +81,12 @@ def _check_mappable(run: LoadedRun, moved_by: CourseLog, params: GridSlamParams)
             f"{run.path}: no scan has a return between [grid.grid] min_range = {grid.min_range:g} m and "
             f"max_range = {grid.max_range:g} m: there is nothing to map"
         )
-    path = dead_reckoning(moved_by, run.start_pose)[:, :2]
-    width, height = path.max(axis=0) - path.min(axis=0) + 2 * grid.max_range
+    width, height = reckoned[:, :2].max(axis=0) - reckoned[:, :2].min(axis=0) + 2 * grid.max_range
     problem = grid_map_problem(width, height, grid.resolution)
     if problem:
-        step = int(np.argmax(np.abs(moved_by.increments[:, 0])))
-        where = f"line {moved_by.line_numbers[step]}" if moved_by.line_numbers is not None else f"record {step}"
+        step, metres = course_log.longest_step(left_out=glitches)
         raise ValueError(
-            f"{run.path}: the odometry spans {width:.0f} m x {height:.0f} m (its longest step, {where}, "
-            f"{abs(moved_by.increments[step, 0]):.3g} m): {problem}. A glitch? [odometry] jump_tolerance leaves "
-            "out steps longer than it"
+            f"{run.path}: the odometry spans {width:.0f} m x {height:.0f} m (its longest step, "
+            f"{course_log.line_of(step)}, {metres:.3g} m): {problem}. A glitch? [odometry] jump_tolerance "
+            "leaves out steps longer than it"
         )
