@@ -220,21 +220,24 @@ def _typed(kind, value, allow_infinity: bool = False):
 def load_toml(cls: type[T], path: str | Path) -> T:
     """Read a TOML file into dataclass ``cls`` (sections map to nested dataclass fields); a file
     with ``extends = "other.toml"`` starts from that file's settings (``read_settings``)."""
-    path = Path(path)
-    mapping, chain = read_settings(path)
-    source = str(path) if len(chain) == 1 else f"{path} (extending {', '.join(str(p) for p in chain[1:])})"
-    return from_mapping(cls, mapping, source)
+    mapping, chain = read_settings(Path(path))
+    return from_mapping(cls, mapping, _described(chain))
 
 
 def load_toml_section(cls: type[T], path: str | Path, section: str) -> T:
     """``cls`` from the table ``[section]`` of the TOML file ``path`` (one section of a file of
     several, e.g. a slam config's ``[corners]``), or from the whole file when it has no such table."""
-    path = Path(path)
-    mapping, chain = read_settings(path)
+    mapping, chain = read_settings(Path(path))
     if not isinstance(mapping.get(section), dict):
-        return load_toml(cls, path)
-    source = str(path) if len(chain) == 1 else f"{path} (extending {', '.join(str(p) for p in chain[1:])})"
-    return from_mapping(cls, mapping[section], f"{source} [{section}]")
+        return from_mapping(cls, mapping, _described(chain))
+    return from_mapping(cls, mapping[section], f"{_described(chain)} [{section}]")
+
+
+def _described(chain: list[Path]) -> str:
+    """The files ``read_settings`` read, for messages: the first, and the ones it extends."""
+    if len(chain) == 1:
+        return str(chain[0])
+    return f"{chain[0]} (extending {', '.join(str(p) for p in chain[1:])})"
 
 
 #: The key by which a config file names another (a path relative to it) whose settings it starts from.
