@@ -14,15 +14,13 @@ import signal
 import subprocess
 import sys
 import time
-import traceback
 from pathlib import Path
 
 import numpy as np
 import pytest
-from click.testing import CliRunner
+from cli_runs import cli
 from conftest import PROJECT_ROOT
 
-from mazeslam.cli.main import KNOWN_ERRORS, exit_status, main
 from mazeslam.core.config import ConfigError, InputError, from_mapping, load_toml, with_changes
 from mazeslam.data.carmen import read_carmen
 from mazeslam.fastslam.filter import FastSLAMParams
@@ -32,17 +30,6 @@ from mazeslam.sweeps.runner import RESULTS, SweepLock, load_sweep, run_id, run_s
 
 PROJECT = PROJECT_ROOT
 MAZE = PROJECT / "configs" / "mazes" / "narrow.txt"
-
-
-def cli(*args) -> tuple[int, str]:
-    """(exit status, everything printed) of ``mazeslam ARGS``; a traceback fails the test."""
-    result = CliRunner().invoke(main, [str(a) for a in args])
-    error = result.exception
-    if error is not None and not isinstance(error, SystemExit):
-        trace = "".join(traceback.format_exception(error))
-        assert isinstance(error, KNOWN_ERRORS), f"traceback for mazeslam {' '.join(map(str, args))}:\n{trace}"
-        return exit_status(error), result.output + f"error: {error}\n"
-    return result.exit_code, result.output
 
 
 def refused(*args, expect: str | list[str]) -> str:

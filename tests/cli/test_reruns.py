@@ -11,27 +11,13 @@ import re
 import resource
 import subprocess
 import sys
-import traceback
 from pathlib import Path
 
 import numpy as np
 import pytest
-from click.testing import CliRunner
+from cli_runs import cli
 
-from mazeslam.cli.main import KNOWN_ERRORS, exit_status, main
 from mazeslam.core.outputs import STAGING_PREFIX
-
-
-def mazeslam(*args) -> tuple[int, str]:
-    """(exit status, everything printed) of ``mazeslam ARGS`` as ``mazeslam.cli.main.run`` reports it;
-    a traceback fails the test."""
-    result = CliRunner().invoke(main, [str(a) for a in args])
-    error = result.exception
-    if error is not None and not isinstance(error, SystemExit):
-        trace = "".join(traceback.format_exception(error))
-        assert isinstance(error, KNOWN_ERRORS), f"traceback for mazeslam {' '.join(map(str, args))}:\n{trace}"
-        return exit_status(error), result.output + f"error: {error}\n"
-    return result.exit_code, result.output
 
 
 def contents(folder: Path) -> dict[str, bytes]:
@@ -53,7 +39,7 @@ def short_log(tmp_path_factory) -> Path:
 def last_run(short_log, tmp_path) -> Path:
     """The folder of a good ``slam`` run of ``short_log``, and a file of the user's in it."""
     out = tmp_path / "out"
-    status, output = mazeslam("slam", short_log, "--out", out, "--quiet")
+    status, output = cli("slam", short_log, "--out", out, "--quiet")
     assert status == 0, output
     (out / "notes.txt").write_text("the user's own file\n")
     return out
@@ -63,7 +49,7 @@ def test_a_rerun_with_a_config_error_keeps_the_last_results(short_log, last_run,
     before = contents(last_run)
     config = tmp_path / "simulation.toml"
     config.write_text("[maze]\nrows = 4\n")  # a simulator config given to slam
-    status, output = mazeslam("slam", short_log, "--out", last_run, "--config", config, "--quiet")
+    status, output = cli("slam", short_log, "--out", last_run, "--config", config, "--quiet")
     assert status == 2
     assert len(output.splitlines()) == 1 and output.startswith(f"error: {config}: unknown parameter(s) maze"), output
     assert contents(last_run) == before
@@ -82,7 +68,7 @@ def test_a_run_that_stops_while_writing_leaves_the_folder_as_it_was(short_log, l
         raise failure
 
     monkeypatch.setattr(np, "savetxt", stops_partway)
-    status, output = mazeslam("slam", short_log, "--out", last_run, "--quiet")
+    status, output = cli("slam", short_log, "--out", last_run, "--quiet")
     assert status == 1
     expected = "Aborted!" if isinstance(failure, KeyboardInterrupt) else "error: {}: cannot write: File too large"
     assert output.splitlines()[-1] == expected.format(last_run / "best_trajectory.csv")
@@ -123,11 +109,11 @@ def test_a_successful_rerun_replaces_every_file(short_log, tmp_path):
     """A landmarks run with an animation, then a grid run: no slam.gif or landmarks.csv of the first
     beside the second's files, and every file of the command's is new (none kept from the first)."""
     out = tmp_path / "out"
-    assert mazeslam("slam", short_log, "--out", out, "--animate", "--quiet")[0] == 0
+    assert cli("slam", short_log, "--out", out, "--animate", "--quiet")[0] == 0
     (out / "notes.txt").write_text("the user's own file\n")
     first = {path.name: path.stat().st_ino for path in out.iterdir()}
     assert {"slam.gif", "landmarks.csv", "slam.png"} <= set(first)
-    status, output = mazeslam("slam", short_log, "--out", out, "--map", "grid", "--quiet")
+    status, output = cli("slam", short_log, "--out", out, "--map", "grid", "--quiet")
     assert status == 0, output
     wrote = {Path(path).name for path in re.search(r"^wrote (.*)$", output, re.M).group(1).split(", ")}
     second = {path.name: path.stat().st_ino for path in out.iterdir()}
@@ -142,31 +128,31 @@ def test_two_logs_of_one_name_do_not_share_the_default_folder(tmp_path, monkeypa
     monkeypatch.chdir(tmp_path)
     for folder, seed in [("a", 1), ("b", 2)]:
         simulate(Path(folder) / "run.log", seed=seed, duration=4.0, progress=False)
-    assert mazeslam("slam", "a/run.log", "--quiet")[0] == 0
+    assert cli("slam", "a/run.log", "--quiet")[0] == 0
     default = Path("runs/run/slam")
     before = contents(default)
-    status, output = mazeslam("slam", "b/run.log", "--quiet")
+    status, output = cli("slam", "b/run.log", "--quiet")
     assert status == 1
     assert output.splitlines() == [
         f"error: {default} holds the slam run of another log named run.log (a/run.log); "
         f"give --out for b/run.log, or remove {default}"
     ]
     assert contents(default) == before
-    assert mazeslam("slam", "b/run.log", "--out", "runs/run-b/slam", "--quiet")[0] == 0
-    assert mazeslam("slam", tmp_path / "a" / "run.log", "--quiet")[0] == 0  # the same log, however named
-    assert mazeslam("smooth", "a/run.log")[0] == 0
-    status, output = mazeslam("smooth", "b/run.log")
+    assert cli("slam", "b/run.log", "--out", "runs/run-b/slam", "--quiet")[0] == 0
+    assert cli("slam", tmp_path / "a" / "run.log", "--quiet")[0] == 0  # the same log, however named
+    assert cli("smooth", "a/run.log")[0] == 0
+    status, output = cli("smooth", "b/run.log")
     assert status == 1 and "runs/run/smooth holds the smooth run of another log named run.log" in output
 
 
 def test_smooth_keeps_the_last_results_when_a_rerun_fails(short_log, tmp_path):
     out = tmp_path / "smooth"
-    assert mazeslam("smooth", short_log, "--out", out)[0] == 0
+    assert cli("smooth", short_log, "--out", out)[0] == 0
     assert {"trajectory.csv", "map.json", "smooth.png"} <= {path.name for path in out.iterdir()}
     before = contents(out)
     config = tmp_path / "bad.toml"
     config.write_text("[fastslam]\nNPARTICLES = -1\n")
-    status, output = mazeslam("smooth", short_log, "--out", out, "--config", config)
+    status, output = cli("smooth", short_log, "--out", out, "--config", config)
     assert status == 2 and output.startswith("error: ") and len(output.splitlines()) == 1, output
     assert contents(out) == before
     assert not [path for path in out.iterdir() if path.name.startswith(STAGING_PREFIX)]
