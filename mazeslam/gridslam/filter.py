@@ -264,8 +264,7 @@ class GridSlam:
             reach = np.vstack([transform_points(start, rays.reach) for start in starts] + [starts[:, :2]])
             window = grid.window(*grid.tile_range(reach, self.params.window_margin))
             if grid.tiles and len(points) >= 3:
-                seen = np.vstack([transform_points(start, points) for start in starts])
-                field = LikelihoodField(window.crop(seen, self.params.window_margin), self.params.match)
+                field = LikelihoodField(window, self.params.match, self.params.window_margin)
                 if field.has_occupied:
                     pose, log_etas[index], accepted = self._propose(
                         field, points, predicted, information, starts if self.search_every_scan else None
@@ -386,7 +385,8 @@ class GridSlam:
             return np.zeros((0, 3))
         radius = np.hypot(*rays.reach.T).max(initial=0.0)
         disc = predicted[:2] + np.array([[-radius, -radius], [radius, radius]])
-        field = LikelihoodField(grid.window(*grid.tile_range(disc, self.params.window_margin)), self.params.match)
+        window = grid.window(*grid.tile_range(disc, self.params.window_margin))
+        field = LikelihoodField(window, self.params.match, self.params.window_margin)
         if not field.has_occupied:
             return np.zeros((0, 3))
         candidates = self._search(field, points, predicted, self.params.every_scan_covariance)

@@ -1,8 +1,8 @@
 """Scan matching against an occupancy grid: a likelihood field and Gauss-Newton on it.
 
-The field is the distance ``d`` (m) from every cell of a window to the nearest occupied cell (log-odds
-above ``occupied_threshold``), from OpenCV's exact Euclidean distance transform. A scan's end points
-at a robot pose score
+The field is the distance ``d`` (m) from a point to the nearest occupied cell (log-odds above
+``occupied_threshold``) of a window of the map, exact between cell centres and capped at a reach,
+computed where a lookup reads it. A scan's end points at a robot pose score
 
     log p(z | m, x) = scale * sum_i log(exp(-d_i^2 / (2 sigma^2)) + floor)
 
@@ -16,11 +16,12 @@ wide at first and the optimum sharp at last.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
 from mazeslam.core.config import require
-from mazeslam.core.geometry import transform_points, wrap_angle
+from mazeslam.core.geometry import wrap_angle
 from mazeslam.gridslam.occupancy import Window
 
 
@@ -63,50 +64,53 @@ class MatchParams:
 
 
 class LikelihoodField:
-    """The distance (m) from each cell of ``window`` to its nearest occupied cell, interpolated."""
+    """The distance (m) from a world point to the nearest occupied cell of ``window`` (log-odds above
+    ``params.occupied_threshold``), at most ``reach`` m, bilinear between cell centres.
 
-    def __init__(self, window: Window, params: MatchParams):
-        import cv2  # here, not at the top: the slam config names the grid's settings, and OpenCV is slow to load
+    A cell's distance is the exact Euclidean distance between cell centres, what a distance
+    transform of the whole window gives, capped at ``reach``; it is computed the first time a
+    lookup reads the cell (``mazeslam.gridslam.kernels.lookup``) and kept, so a scan
+    match pays for the few hundred cells around its end points, not for every cell of the window.
+    ``reach`` None: uncapped (the window's diagonal).
+    """
 
-        self.occupied = window.values > params.occupied_threshold
-        free = (~self.occupied).astype(np.uint8)
-        self.has_occupied = bool(self.occupied.any())
-        self.distance = cv2.distanceTransform(free, cv2.DIST_L2, cv2.DIST_MASK_PRECISE) * window.resolution
-        self.origin, self.resolution = window.origin, window.resolution
+    def __init__(self, window: Window, params: MatchParams, reach: float | None = None):
+        from mazeslam.gridslam import kernels  # here, not at the top: numba loads only where the grid filter runs
+
+        self.kernels: Any = kernels  # compiled functions: numba's dispatchers are not typed by their Python signature
+        self.values = np.ascontiguousarray(window.values, dtype=np.float32)
+        self.threshold = float(params.occupied_threshold)
+        self.blocks = kernels.occupied_blocks(self.values, self.threshold)
+        self.has_occupied = bool(self.blocks.any())
+        self.origin = np.asarray(window.origin, dtype=float)
+        self.resolution = float(window.resolution)
+        cap = float(np.hypot(*self.values.shape)) if reach is None else reach / self.resolution
+        self.limit = min(cap, float(np.hypot(*self.values.shape)))  # cells
+        self.memo = np.full(self.values.size, -1.0, dtype=np.float32)  # cells' distances, -1 not yet read
+
+    @property
+    def _grid(self) -> tuple:
+        """The arguments every distance kernel starts with."""
+        return self.values, self.threshold, self.blocks, self.limit, self.memo, self.origin, self.resolution
 
     def occupied_points(self) -> np.ndarray:
         """World positions (M, 2) of the occupied cells' centres, m."""
-        return self.origin + (np.argwhere(self.occupied) + 0.5) * self.resolution
+        return self.origin + (np.argwhere(self.values > self.threshold) + 0.5) * self.resolution
 
     def lookup(self, points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Bilinear distance (...,) at world ``points`` (..., 2) and its gradient (..., 2), m/m.
         Points outside the window take the nearest border cells."""
-        cell = (points - self.origin) / self.resolution - 0.5  # cell centres at integers
-        base = np.floor(cell)
-        frac = cell - base
-        limit = np.array(self.distance.shape) - 2
-        i = np.clip(base[..., 0].astype(int), 0, limit[0])
-        j = np.clip(base[..., 1].astype(int), 0, limit[1])
-        d00, d10 = self.distance[i, j], self.distance[i + 1, j]
-        d01, d11 = self.distance[i, j + 1], self.distance[i + 1, j + 1]
-        fx, fy = frac[..., 0], frac[..., 1]
-        value = (d00 * (1 - fx) + d10 * fx) * (1 - fy) + (d01 * (1 - fx) + d11 * fx) * fy
-        gradient_x = ((d10 - d00) * (1 - fy) + (d11 - d01) * fy) / self.resolution
-        gradient_y = ((d01 - d00) * (1 - fx) + (d11 - d10) * fx) / self.resolution
-        return value, np.stack([gradient_x, gradient_y], axis=-1)
+        flat = np.ascontiguousarray(points, dtype=float).reshape(-1, 2)
+        value, gradient = np.empty(len(flat)), np.empty((len(flat), 2))
+        self.kernels.lookup(*self._grid, flat, value, gradient)
+        return value.reshape(points.shape[:-1]), gradient.reshape(points.shape)
 
     def log_likelihood(self, poses: np.ndarray, points: np.ndarray, params: MatchParams) -> np.ndarray:
         """``log p(z | m, x)`` (K,) of end points ``points`` (N, 2) (robot frame) at ``poses`` (K, 3)."""
-        cos_t, sin_t = np.cos(poses[:, 2:3]), np.sin(poses[:, 2:3])
-        world = np.stack(
-            [
-                poses[:, :1] + cos_t * points[:, 0] - sin_t * points[:, 1],
-                poses[:, 1:2] + sin_t * points[:, 0] + cos_t * points[:, 1],
-            ],
-            axis=-1,
+        poses = np.ascontiguousarray(poses, dtype=float)
+        return self.kernels.objective(
+            *self._grid, poses, _points(points), np.zeros(3), np.zeros((3, 3)), params.sigma, params.scale, params.floor
         )
-        distance, _ = self.lookup(world)
-        return params.scale * np.log(np.exp(-0.5 * (distance / params.sigma) ** 2) + params.floor).sum(axis=-1)
 
     def objective(
         self,
@@ -124,8 +128,13 @@ class LikelihoodField:
 
     def overlap(self, pose: np.ndarray, points: np.ndarray, params: MatchParams) -> float:
         """Fraction of ``points`` (N, 2) (robot frame) within ``overlap_distance`` of an occupied cell."""
-        distance, _ = self.lookup(transform_points(pose, points))
-        return float(np.mean(distance <= params.overlap_distance))
+        pose = np.asarray(pose, dtype=float)
+        return float(self.kernels.overlap(*self._grid, pose, _points(points), params.overlap_distance))
+
+
+def _points(points: np.ndarray) -> np.ndarray:
+    """``points`` (N, 2) as the kernels take them: float64, C-contiguous."""
+    return np.ascontiguousarray(points, dtype=float)
 
 
 def match_points(ranges: np.ndarray, bearings: np.ndarray, mount: np.ndarray, params: MatchParams) -> np.ndarray:
@@ -149,23 +158,16 @@ def refine_pose(
 
     Each stage of ``sigma_schedule`` runs ``iterations`` Gauss-Newton steps on the residuals
     ``d_i`` weighted by ``rho'(d_i) / d_i`` of ``rho(d) = -log(exp(-d^2 / (2 s^2)) + floor)``: points
-    near a wall weigh ``1 / s^2``, points far from all walls nothing.
+    near a wall weigh ``1 / s^2``, points far from all walls nothing (``kernels.refine``).
     """
-    pose = np.array(prior if start is None else start, dtype=float)
-    for sigma in params.sigma_schedule:
-        for _ in range(params.iterations):
-            cos_t, sin_t = np.cos(pose[2]), np.sin(pose[2])
-            arm = np.column_stack(
-                [cos_t * points[:, 0] - sin_t * points[:, 1], sin_t * points[:, 0] + cos_t * points[:, 1]]
-            )
-            distance, gradient = field.lookup(pose[:2] + arm)
-            jacobian = np.column_stack([gradient, gradient[:, 1] * arm[:, 0] - gradient[:, 0] * arm[:, 1]])
-            likelihood = np.exp(-0.5 * (distance / sigma) ** 2)
-            weight = params.scale * likelihood / (likelihood + params.floor) / sigma**2
-            offset = pose - prior
-            offset[2] = wrap_angle(offset[2])
-            hessian = (jacobian * weight[:, None]).T @ jacobian + prior_information
-            step = np.linalg.solve(hessian, (jacobian * weight[:, None]).T @ distance + prior_information @ offset)
-            pose -= step
-            pose[2] = wrap_angle(pose[2])
-    return pose
+    return field.kernels.refine(
+        *field._grid,
+        _points(points),
+        np.asarray(prior, dtype=float),
+        np.ascontiguousarray(prior_information, dtype=float),
+        np.asarray(params.sigma_schedule, dtype=float),
+        params.iterations,
+        params.scale,
+        params.floor,
+        np.array(prior if start is None else start, dtype=float),
+    )

@@ -21,7 +21,6 @@ from dataclasses import dataclass
 import numpy as np
 
 from mazeslam.core.config import require
-from mazeslam.core.geometry import transform_points
 from mazeslam.data.map_io import FREE, OCCUPIED, UNKNOWN, OccupancyMap
 
 TileKey = tuple[int, int]
@@ -106,12 +105,11 @@ class TiledGrid:
         return Window(values, lower * self.tile_metres, self.params.resolution, lower)
 
     def store(self, window: Window, changed: np.ndarray) -> None:
-        """Replace the tiles of ``window`` whose cells ``changed`` (bool, the window's shape) by
-        new tiles copied from it; other tiles keep their (possibly shared) arrays."""
+        """Replace the tiles of ``window`` flagged in ``changed`` (bool (tiles x, tiles y), what
+        ``integrate_scan`` returns) by new tiles copied from it; other tiles keep their (possibly
+        shared) arrays."""
         size = self.params.tile_size
-        tiles_x, tiles_y = changed.shape[0] // size, changed.shape[1] // size
-        touched = changed.reshape(tiles_x, size, tiles_y, size).any(axis=(1, 3))
-        for a, b in zip(*np.nonzero(touched)):
+        for a, b in zip(*np.nonzero(changed)):
             block = window.values[a * size : (a + 1) * size, b * size : (b + 1) * size]
             self.tiles[(int(window.lower_tile[0] + a), int(window.lower_tile[1] + b))] = block.copy()
 
@@ -140,26 +138,6 @@ class Window:
     origin: np.ndarray
     resolution: float
     lower_tile: np.ndarray
-
-    def crop(self, points: np.ndarray, margin: float) -> Window:
-        """A view of the cells around ``points`` (N, 2) (world, m) widened by ``margin`` m, within
-        this window; for reading only (``TiledGrid.store`` takes whole windows)."""
-        low = np.floor((points.min(axis=0) - margin - self.origin) / self.resolution).astype(int)
-        high = np.ceil((points.max(axis=0) + margin - self.origin) / self.resolution).astype(int)
-        low = np.clip(low, 0, np.array(self.values.shape) - 2)
-        high = np.clip(high, low + 2, self.values.shape)
-        return Window(
-            self.values[low[0] : high[0], low[1] : high[1]],
-            self.origin + low * self.resolution,
-            self.resolution,
-            self.lower_tile,
-        )
-
-    def cells(self, points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """The window cells (i (K,), j (K,)) of those of world ``points`` (N, 2) inside the window."""
-        index = np.floor((points - self.origin) / self.resolution).astype(int)
-        inside = np.all((index >= 0) & (index < self.values.shape), axis=1)
-        return index[inside, 0], index[inside, 1]
 
 
 @dataclass(frozen=True)
@@ -208,17 +186,27 @@ def scan_rays(
 
 def integrate_scan(window: Window, rays: ScanRays, pose: np.ndarray, params: GridParams) -> np.ndarray:
     """Add one scan taken at robot ``pose`` (3,) to ``window`` in place: each cell a beam crosses
-    gets ``miss`` once, each cell a beam ends in ``hit`` once (and no miss), clamped. Returns the
-    cells changed (bool, the window's shape). Samples outside the window are left out."""
-    free = np.zeros(window.values.shape, dtype=bool)
-    hits = np.zeros(window.values.shape, dtype=bool)
-    free[window.cells(transform_points(pose, rays.free))] = True
-    hits[window.cells(transform_points(pose, rays.hits))] = True
-    free &= ~hits
-    window.values[free] += params.miss
-    window.values[hits] += params.hit
-    np.clip(window.values, -params.clamp, params.clamp, out=window.values)
-    return free | hits
+    gets ``miss`` once, each cell a beam ends in ``hit`` once (and no miss), clamped. Samples
+    outside the window are left out. Returns the tiles changed: bool (tiles x, tiles y) of the
+    window's, as ``TiledGrid.store`` takes them (``mazeslam.gridslam.kernels.integrate``)."""
+    from mazeslam.gridslam import kernels  # here, not at the top: numba loads only where the grid filter runs
+
+    cos_t, sin_t = np.cos(pose[2]), np.sin(pose[2])
+    return kernels.integrate(
+        window.values,
+        np.asarray(window.origin, dtype=float),
+        float(window.resolution),
+        np.ascontiguousarray(rays.free, dtype=float),
+        np.ascontiguousarray(rays.hits, dtype=float),
+        float(pose[0]),
+        float(pose[1]),
+        float(cos_t),
+        float(sin_t),
+        params.miss,
+        params.hit,
+        params.clamp,
+        params.tile_size,
+    )
 
 
 def distinct_tile_bytes(grids: list[TiledGrid]) -> int:

@@ -1,0 +1,301 @@
+"""Compiled kernels of the grid filter (numba, ``cache=True``: compiled once per machine and kept on
+disk beside this module, or in numba's user cache where that is not writable).
+
+Imported only where the grid filter runs (``mazeslam.gridslam.matching`` and ``.occupancy`` import
+it inside their functions): numba takes about 0.15 s to import, and a config that merely names the
+grid's settings should not pay it.
+
+Cells: a window's log-odds ``values`` (X, Y) float32 are indexed ``[i, j]``, i along world x; cell
+``[i, j]`` covers ``origin + [i, i + 1) r x [j, j + 1) r`` for the resolution ``r`` (m). A cell is
+occupied where its log-odds exceed ``threshold``.
+
+The kernels, in the order a scan uses them:
+
+1. ``occupied_blocks``: which ``BLOCK`` x ``BLOCK`` blocks of a window hold an occupied cell, so
+   that the distance search skips empty ones.
+2. ``nearest_occupied``: the exact Euclidean distance, in cells, from a cell's centre to the nearest
+   occupied cell's centre, searched where it is read (rings of cells near the cell, then the
+   non-empty blocks within the limit), truncated at ``limit`` cells. The same values as a distance
+   transform of the whole window (``cv2.distanceTransform``, ``DIST_MASK_PRECISE``) capped at the
+   limit, for the few hundred cells a scan match reads instead of every cell of the window.
+3. ``bilinear``: the distance (m) at a world point, bilinear between the four nearest cell
+   centres, and its gradient (the likelihood field's lookup).
+4. ``refine``: iteratively reweighted Gauss-Newton of a pose on that distance plus a Gaussian
+   prior (``mazeslam.gridslam.matching.refine_pose``).
+5. ``objective`` and ``overlap``: scores of poses, and the share of points near a wall.
+6. ``integrate``: a scan's free samples and hits added to a window (``integrate_scan``).
+
+Distances are memoised per window in ``memo`` (X * Y,) float32, -1 where not computed yet.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+#: Side of the blocks the distance search skips when they hold no occupied cell, cells.
+BLOCK = 8
+#: Rings of single cells searched around a cell before the search turns to blocks.
+NEAR_RINGS = 4
+
+
+@njit(cache=True)
+def occupied_blocks(values: np.ndarray, threshold: float) -> np.ndarray:
+    """Whether each ``BLOCK`` x ``BLOCK`` block of ``values`` (X, Y) holds a cell above
+    ``threshold``: bool (ceil(X / BLOCK), ceil(Y / BLOCK))."""
+    size_x, size_y = values.shape
+    blocks = np.zeros(((size_x + BLOCK - 1) // BLOCK, (size_y + BLOCK - 1) // BLOCK), dtype=np.bool_)
+    for i in range(size_x):
+        for j in range(size_y):
+            if values[i, j] > threshold:
+                blocks[i // BLOCK, j // BLOCK] = True
+    return blocks
+
+
+@njit(cache=True)
+def _ring_search(values, threshold, i, j, rings, best):
+    """The least squared distance (cells) below ``best`` from cell (i, j) to an occupied cell at a
+    Chebyshev distance of at most ``rings`` cells (``best`` where there is none). Ring ``r`` holds
+    the cells at Chebyshev distance r, none nearer than r: the search stops once r^2 >= best."""
+    size_x, size_y = values.shape
+    for ring in range(rings + 1):
+        if ring * ring >= best:
+            break
+        for a in range(max(i - ring, 0), min(i + ring, size_x - 1) + 1):
+            if a == i - ring or a == i + ring:  # the ring's top and bottom rows, whole
+                for b in range(max(j - ring, 0), min(j + ring, size_y - 1) + 1):
+                    best = _closer(values[a, b], threshold, i, j, a, b, best)
+            else:  # its sides, two cells a row
+                if j - ring >= 0:
+                    best = _closer(values[a, j - ring], threshold, i, j, a, j - ring, best)
+                if j + ring < size_y:
+                    best = _closer(values[a, j + ring], threshold, i, j, a, j + ring, best)
+    return best
+
+
+@njit(cache=True)
+def _closer(value, threshold, i, j, a, b, best):
+    """``best`` or, if cell (a, b) (log-odds ``value``) is occupied and nearer to (i, j), its
+    squared distance (cells). Scalars only, so that it compiles inline into the search loops."""
+    if value > threshold:
+        squared = (a - i) ** 2 + (b - j) ** 2
+        if squared < best:
+            return float(squared)
+    return best
+
+
+@njit(cache=True)
+def _block_search(values, threshold, blocks, i, j, limit, best):
+    """The least squared distance (cells) below ``best`` from cell (i, j) to an occupied cell of
+    the non-empty blocks within ``limit`` cells."""
+    size_x, size_y = values.shape
+    reach = int(math.ceil(limit))
+    for block_a in range(max((i - reach) // BLOCK, 0), min((i + reach) // BLOCK, blocks.shape[0] - 1) + 1):
+        low_a, high_a = block_a * BLOCK, min(block_a * BLOCK + BLOCK, size_x) - 1
+        gap_a = max(low_a - i, 0, i - high_a)
+        for block_b in range(max((j - reach) // BLOCK, 0), min((j + reach) // BLOCK, blocks.shape[1] - 1) + 1):
+            if not blocks[block_a, block_b]:
+                continue
+            low_b, high_b = block_b * BLOCK, min(block_b * BLOCK + BLOCK, size_y) - 1
+            gap_b = max(low_b - j, 0, j - high_b)
+            if gap_a * gap_a + gap_b * gap_b >= best:
+                continue
+            for a in range(low_a, high_a + 1):
+                for b in range(low_b, high_b + 1):
+                    best = _closer(values[a, b], threshold, i, j, a, b, best)
+    return best
+
+
+@njit(cache=True)
+def _search(values, threshold, blocks, limit, i, j):
+    """The distance (cells, float32) from cell (i, j) to the nearest occupied cell, at most ``limit``."""
+    best = _ring_search(values, threshold, i, j, NEAR_RINGS, limit * limit)
+    if best > (NEAR_RINGS + 1) * (NEAR_RINGS + 1):  # a nearer cell may lie beyond the rings searched
+        best = _block_search(values, threshold, blocks, i, j, limit, best)
+    return np.float32(math.sqrt(best))
+
+
+@njit(cache=True)
+def lookup(values, threshold, blocks, limit, memo, origin, resolution, world, distance, gradient):
+    """The distance (m) at world points ``world`` (N, 2), bilinear between the four nearest cell
+    centres, into ``distance`` (N,), and its gradient (m/m) into ``gradient`` (N, 2). A cell's
+    distance is searched the first time it is read (``_search``) and kept in ``memo`` (X * Y,). A
+    point outside the window takes the border cells' values (the interpolation then extrapolates).
+
+    One function for the whole batch of points: numba passes arrays to a compiled call with a
+    reference count, which costs more than a memoised read, so the per-point work stays in this loop.
+    """
+    size_y = values.shape[1]
+    scale = np.float32(resolution)
+    for k in range(world.shape[0]):
+        cell_x = (world[k, 0] - origin[0]) / resolution - 0.5  # cell centres at integers
+        cell_y = (world[k, 1] - origin[1]) / resolution - 0.5
+        base_x, base_y = math.floor(cell_x), math.floor(cell_y)
+        fx, fy = cell_x - base_x, cell_y - base_y
+        i = min(max(int(base_x), 0), values.shape[0] - 2)
+        j = min(max(int(base_y), 0), size_y - 2)
+        for corner in range(4):
+            a, b = i + (corner & 1), j + (corner >> 1)
+            if memo[a * size_y + b] < 0:
+                memo[a * size_y + b] = _search(values, threshold, blocks, limit, a, b)
+        d00, d10 = memo[i * size_y + j] * scale, memo[(i + 1) * size_y + j] * scale
+        d01, d11 = memo[i * size_y + j + 1] * scale, memo[(i + 1) * size_y + j + 1] * scale
+        distance[k] = (d00 * (1 - fx) + d10 * fx) * (1 - fy) + (d01 * (1 - fx) + d11 * fx) * fy
+        gradient[k, 0] = ((d10 - d00) * (1 - fy) + (d11 - d01) * fy) / resolution
+        gradient[k, 1] = ((d01 - d00) * (1 - fx) + (d11 - d10) * fx) / resolution
+
+
+@njit(cache=True)
+def place(pose, points, world):
+    """``points`` (N, 2) in the frame of ``pose`` (3,) written to ``world`` (N, 2) in its parent's."""
+    cos_t, sin_t = math.cos(pose[2]), math.sin(pose[2])
+    for k in range(points.shape[0]):
+        world[k, 0] = pose[0] + cos_t * points[k, 0] - sin_t * points[k, 1]
+        world[k, 1] = pose[1] + sin_t * points[k, 0] + cos_t * points[k, 1]
+
+
+@njit(cache=True)
+def _wrap(angle):
+    """``angle`` (rad) wrapped to (-pi, pi], as ``mazeslam.core.geometry.wrap_angle``."""
+    return math.pi - np.mod(math.pi - angle, 2 * math.pi)
+
+
+@njit(cache=True)
+def _squared_norm(offset, information):
+    """``offset^T information offset`` for a pose offset (3,), its heading wrapped first (in place)."""
+    offset[2] = _wrap(offset[2])
+    total = 0.0
+    for a in range(3):
+        for b in range(3):
+            total += offset[a] * information[a, b] * offset[b]
+    return total
+
+
+@njit(cache=True)
+def refine(
+    values,
+    threshold,
+    blocks,
+    limit,
+    memo,
+    origin,
+    resolution,
+    points,
+    prior,
+    information,
+    schedule,
+    iterations,
+    scale,
+    floor,
+    start,
+):
+    """The pose (3,) maximising the end points' likelihood times the Gaussian prior, by
+    iteratively reweighted Gauss-Newton from ``start`` (3,): ``points`` (N, 2) robot frame,
+    ``prior`` (3,) and its ``information`` (3, 3), the stages' sigmas ``schedule`` (S,) m,
+    ``iterations`` per stage, the likelihood's ``scale`` and ``floor`` (``MatchParams``)."""
+    count = points.shape[0]
+    arms, world = np.empty((count, 2)), np.empty((count, 2))
+    distance, gradient = np.empty(count), np.empty((count, 2))
+    pose = start.copy()
+    for sigma in schedule:
+        for _ in range(iterations):
+            place(np.array([0.0, 0.0, pose[2]]), points, arms)
+            world[:, 0] = pose[0] + arms[:, 0]
+            world[:, 1] = pose[1] + arms[:, 1]
+            lookup(values, threshold, blocks, limit, memo, origin, resolution, world, distance, gradient)
+            offset = pose - prior
+            offset[2] = _wrap(offset[2])
+            hessian = information.copy()
+            step = information @ offset
+            for k in range(count):
+                likelihood = math.exp(-0.5 * (distance[k] / sigma) ** 2)
+                weight = scale * likelihood / (likelihood + floor) / sigma**2
+                row = (gradient[k, 0], gradient[k, 1], gradient[k, 1] * arms[k, 0] - gradient[k, 0] * arms[k, 1])
+                for a in range(3):
+                    step[a] += weight * row[a] * distance[k]
+                    for b in range(3):
+                        hessian[a, b] += weight * row[a] * row[b]
+            pose -= np.linalg.solve(hessian, step)
+            pose[2] = _wrap(pose[2])
+    return pose
+
+
+@njit(cache=True)
+def objective(
+    values, threshold, blocks, limit, memo, origin, resolution, poses, points, prior, information, sigma, scale, floor
+):
+    """``log p(z | m, x) - 0.5 (x - prior)^T information (x - prior)`` (K,) at ``poses`` (K, 3) for
+    end points ``points`` (N, 2) robot frame (the heading offset wrapped)."""
+    count = points.shape[0]
+    world, distance, gradient = np.empty((count, 2)), np.empty(count), np.empty((count, 2))
+    scores = np.empty(poses.shape[0])
+    for p in range(poses.shape[0]):
+        place(poses[p], points, world)
+        lookup(values, threshold, blocks, limit, memo, origin, resolution, world, distance, gradient)
+        total = 0.0
+        for k in range(count):
+            total += math.log(math.exp(-0.5 * (distance[k] / sigma) ** 2) + floor)
+        scores[p] = scale * total - 0.5 * _squared_norm(poses[p] - prior, information)
+    return scores
+
+
+@njit(cache=True)
+def overlap(values, threshold, blocks, limit, memo, origin, resolution, pose, points, within):
+    """Share of ``points`` (N, 2) robot frame that lie within ``within`` m of an occupied cell at ``pose`` (3,)."""
+    count = points.shape[0]
+    world, distance, gradient = np.empty((count, 2)), np.empty(count), np.empty((count, 2))
+    place(pose, points, world)
+    lookup(values, threshold, blocks, limit, memo, origin, resolution, world, distance, gradient)
+    return np.sum(distance <= within) / max(count, 1)
+
+
+@njit(cache=True)
+def _cell_of(x, y, origin_x, origin_y, resolution, size_x, size_y):
+    """The flat index of the window cell holding world point (x, y), or -1 outside the window
+    (scalars only, so that it compiles inline into the marking loop)."""
+    i = math.floor((x - origin_x) / resolution)
+    j = math.floor((y - origin_y) / resolution)
+    if i < 0 or j < 0 or i >= size_x or j >= size_y:
+        return -1
+    return int(i) * size_y + int(j)
+
+
+@njit(cache=True)
+def _mark(source, mark, marks, order, count, origin, resolution, shape, x0, y0, cos_t, sin_t):
+    """Mark in ``marks`` (X * Y,) with ``mark`` the window cells of the points ``source`` (K, 2)
+    (robot frame, the robot at (x0, y0) heading with cos_t, sin_t) whose mark is lower, appending
+    newly marked cells to ``order`` after its first ``count``; returns the new count."""
+    for k in range(source.shape[0]):
+        x = x0 + cos_t * source[k, 0] - sin_t * source[k, 1]
+        y = y0 + sin_t * source[k, 0] + cos_t * source[k, 1]
+        cell = _cell_of(x, y, origin[0], origin[1], resolution, shape[0], shape[1])
+        if cell >= 0 and marks[cell] < mark:
+            if marks[cell] == 0:
+                order[count] = cell
+                count += 1
+            marks[cell] = mark
+    return count
+
+
+@njit(cache=True)
+def integrate(values, origin, resolution, free, hits, x0, y0, cos_t, sin_t, miss, hit, clamp, tile_size):
+    """Add one scan to ``values`` (X, Y) float32 in place, the robot at (x0, y0) heading with
+    ``cos_t``, ``sin_t``: each cell a sample of ``free`` (F, 2) (robot frame, m) falls in gets
+    ``miss`` once, each cell a point of ``hits`` (H, 2) falls in gets ``hit`` once and no miss, both
+    clamped to [-clamp, clamp]. Samples outside the window are left out. Returns the tiles changed:
+    bool (X / tile_size, Y / tile_size)."""
+    size_x, size_y = values.shape
+    marks = np.zeros(size_x * size_y, dtype=np.uint8)  # 1: a beam crosses the cell, 2: a beam ends in it
+    order = np.empty(free.shape[0] + hits.shape[0], dtype=np.int64)
+    count = _mark(free, 1, marks, order, 0, origin, resolution, values.shape, x0, y0, cos_t, sin_t)
+    count = _mark(hits, 2, marks, order, count, origin, resolution, values.shape, x0, y0, cos_t, sin_t)
+    changed = np.zeros((size_x // tile_size, size_y // tile_size), dtype=np.bool_)
+    low, high = np.float32(-clamp), np.float32(clamp)
+    for k in range(count):
+        i, j = order[k] // size_y, order[k] % size_y
+        change = np.float32(hit) if marks[order[k]] == 2 else np.float32(miss)
+        values[i, j] = min(max(values[i, j] + change, low), high)
+        changed[i // tile_size, j // tile_size] = True
+    return changed
