@@ -41,10 +41,10 @@ import numpy as np
 from mazeslam.core.beams import BeamGeometry
 from mazeslam.core.config import check_setting, require
 from mazeslam.core.geometry import advance_pose, compose, relative, transform_points, wrap_angle
-from mazeslam.core.motion import OdometryNoise, dead_reckoning, predict_relative
+from mazeslam.core.motion import OdometryNoise, dead_reckoning
 from mazeslam.core.resampling import effective_sample_size, normalized_weights, systematic_resample
 from mazeslam.data.log import CourseLog
-from mazeslam.gridslam.matching import LikelihoodField, MatchParams, match_points, refine_pose
+from mazeslam.gridslam.matching import DistanceMemo, LikelihoodField, MatchParams, match_points, match_pose, refine_pose
 from mazeslam.gridslam.occupancy import GridParams, ScanRays, TiledGrid, distinct_tile_bytes, integrate_scan, scan_rays
 from mazeslam.registration.correlative import CorrelativeParams, LikelihoodGrid, correlative_candidates
 from mazeslam.registration.scan_matching import ScanMatchParams, laser_odometry
@@ -205,6 +205,38 @@ def _weighted_nis(nis: np.ndarray, weights: np.ndarray) -> float:
 STENCIL = np.array(list(itertools.product((-1.0, 0.0, 1.0), repeat=3)))
 
 
+def gaussian(mean: np.ndarray, covariance: np.ndarray, normal: np.ndarray) -> np.ndarray:
+    """A draw (3,) from ``N(mean, covariance)`` (3,), (3, 3) made of a standard normal draw
+    ``normal`` (3,), as numpy's ``multivariate_normal(method="eigh")`` makes it."""
+    values, vectors = np.linalg.eigh(covariance)
+    return mean + normal @ (vectors * np.sqrt(np.abs(values))).T
+
+
+@dataclass(frozen=True)
+class Proposal:
+    """One particle's improved proposal.
+
+    Attributes:
+        centre: (3,) the stencil's centre, world frame: the match where it was accepted, else the
+            prediction.
+        log_eta: log of the proposal's normaliser ``sum_j tau_j`` (the particle's weight factor).
+        accepted: the match was accepted (enough end points near walls).
+        mean, covariance: (3,), (3, 3) the ``tau``-weighted moments of the stencil's steps.
+    """
+
+    centre: np.ndarray
+    log_eta: float
+    accepted: bool
+    mean: np.ndarray
+    covariance: np.ndarray
+
+    def draw(self, normal: np.ndarray) -> np.ndarray:
+        """The new pose (3,) drawn from the proposal with the standard normal draw ``normal`` (3,)."""
+        pose = self.centre + gaussian(self.mean, self.covariance, normal)
+        pose[2] = wrap_angle(pose[2])
+        return pose
+
+
 @dataclass(frozen=True)
 class ScanSensor:
     """How a log's scans are turned into points: bearings (N,) rad and sensor mount (2,), robot
@@ -234,6 +266,8 @@ class GridSlam:
         self.maps = [TiledGrid(params.grid) for _ in range(count)]
         self.rng = np.random.default_rng(params.seed)
         self.resamplings = 0
+        self.memo = DistanceMemo()  # the likelihood fields' buffers, reused scan to scan and particle to particle
+        self.stencil = STENCIL * np.asarray(params.kernel_step, dtype=float)  # (27, 3) steps around the match
 
     @property
     def weights(self) -> np.ndarray:
@@ -252,55 +286,55 @@ class GridSlam:
         clears_to = self.sensor.max_range if self.params.grid.clear_no_return else 0.0
         rays = scan_rays(ranges, self.sensor.bearings, self.sensor.mount, self.params.grid, clears_to)
         trusted = np.where(ranges >= self.params.grid.min_range, ranges, 0.0)
-        points = match_points(trusted, self.sensor.bearings, self.sensor.mount, self.params.match)
+        points = np.ascontiguousarray(match_points(trusted, self.sensor.bearings, self.sensor.mount, self.params.match))
         covariance = self.params.motion_covariance(motion)
         information = np.linalg.inv(covariance)
         offsets = self._searched_offsets(points, motion, rays) if self.search_every_scan else np.zeros((0, 3))
-        log_etas, nis, matched = np.zeros(len(self.poses)), np.full(len(self.poses), np.nan), 0
+        count = len(self.poses)
+        predicted = compose(self.poses, motion)  # (P, 3)
+        normals = self.rng.standard_normal((count, 3))  # each particle's draw, in particle order
+        log_etas, nis, matched = np.zeros(count), np.full(count, np.nan), 0
         weights = self.weights
         for index, grid in enumerate(self.maps):
-            predicted = compose(self.poses[index], motion)
-            starts = np.vstack([predicted, compose(predicted, offsets).reshape(-1, 3)])  # (1 + C, 3)
+            starts = np.vstack([predicted[index], compose(predicted[index], offsets).reshape(-1, 3)])  # (1 + C, 3)
             reach = np.vstack([transform_points(start, rays.reach) for start in starts] + [starts[:, :2]])
             window = grid.window(*grid.tile_range(reach, self.params.window_margin))
+            proposal = None
             if grid.tiles and len(points) >= 3:
-                field = LikelihoodField(window, self.params.match, self.params.window_margin)
+                field = LikelihoodField(window, self.params.match, self.params.window_margin, self.memo)
                 if field.has_occupied:
-                    pose, log_etas[index], accepted = self._propose(
-                        field, points, predicted, information, starts if self.search_every_scan else None
-                    )
-                    if accepted:
-                        nis[index] = motion_nis(pose, predicted, covariance)
-                    else:
-                        pose = self._unmatched_draw(index, motion, covariance)
-                    matched += accepted
-                    self.poses[index] = pose
-                else:
-                    self.poses[index] = self._unmatched_draw(index, motion, covariance)
+                    seeds = starts if self.search_every_scan else None
+                    proposal = self._propose(field, points, predicted[index], information, seeds)
+                    log_etas[index] = proposal.log_eta
+            if proposal is not None and proposal.accepted:
+                self.poses[index] = proposal.draw(normals[index])
+                nis[index] = motion_nis(self.poses[index], predicted[index], covariance)
+                matched += 1
             else:
-                self.poses[index] = self._unmatched_draw(index, motion, covariance)
+                self.poses[index] = self._unmatched_draw(index, motion, covariance, normals[index])
             grid.store(window, integrate_scan(window, rays, self.poses[index], self.params.grid))
         self.log_likelihoods += log_etas - log_etas.max()
-        self.log_weights += (log_etas - log_etas.max()) / (self.params.observation_gain * len(self.poses))
+        self.log_weights += (log_etas - log_etas.max()) / (self.params.observation_gain * count)
         return ScanUpdate(
-            matched / len(self.poses),
+            matched / count,
             _weighted_nis(nis, weights),
             effective_sample_size(self.weights),
             self._resample_if_needed(),
         )
 
-    def _unmatched_draw(self, index: int, motion: np.ndarray, covariance: np.ndarray) -> np.ndarray:
-        """The pose (3,) of particle ``index`` moved by ``motion`` (3,) with noise where its match failed
-        or nothing of its map lies near the scan: ``covariance`` (3, 3), or, before its first scan, the motion noise
-        alone, without ``motion_floor``. The floor stands for the laser odometry's errors between
-        scans; the motion to the first scan is odometry from the known start pose (none when the
-        first record is a scan), and a floor there would turn each particle's whole map by its
-        draw. Drawn at all, not taken as it is, because the map's frame inherits that motion's
-        error: on the simulated building the first 0.5 m (0.01 rad off) taken without noise left
-        the mean path's pose NEES at 17-40 (3 is consistent)."""
+    def _unmatched_draw(self, index: int, motion: np.ndarray, covariance: np.ndarray, normal: np.ndarray) -> np.ndarray:
+        """The pose (3,) of particle ``index`` moved by ``motion`` (3,) with noise where its match
+        failed or nothing of its map lies near the scan, drawn with its standard normal ``normal``
+        (3,): ``covariance`` (3, 3), or, before its first scan, the motion noise alone, without
+        ``motion_floor``. The floor stands for the laser odometry's errors between scans; the
+        motion to the first scan is odometry from the known start pose (none when the first record
+        is a scan), and a floor there would turn each particle's whole map by its draw. Drawn at
+        all, not taken as it is, because the map's frame inherits that motion's error: on the
+        simulated building the first 0.5 m (0.01 rad off) taken without noise left the mean path's
+        pose NEES at 17-40 (3 is consistent)."""
         if not self.maps[index].tiles:
             covariance = self.params.motion_noise.relative_covariance(motion)
-        return predict_relative(self.poses[index][None], motion, covariance, self.rng)[0]
+        return compose(self.poses[index], motion + gaussian(np.zeros(3), covariance, normal))
 
     def _propose(
         self,
@@ -309,33 +343,35 @@ class GridSlam:
         predicted: np.ndarray,
         information: np.ndarray,
         seeds: np.ndarray | None = None,
-    ) -> tuple[np.ndarray, float, bool]:
-        """The improved proposal of one particle: the drawn pose (3,), ``log eta`` and whether the
-        match was accepted (if not, the pose is the stencil's centre and the caller draws one).
-        ``seeds`` (C, 3): where the refinements start when the particles search at every scan (the
-        prediction and the scan's searched poses moved onto it, ``_searched_offsets``)."""
+    ) -> Proposal:
+        """The improved proposal of one particle predicted at ``predicted`` (3,), its scan's end
+        points ``points`` (N, 2) robot frame. ``seeds`` (C, 3): where the refinements start when the
+        particles search at every scan (the prediction and the scan's searched poses moved onto
+        it, ``_searched_offsets``)."""
         match = self.params.match
         if seeds is not None:
             wide = np.linalg.inv(self.params.every_scan_covariance)
             mode = self._best_refinement(field, points, predicted, wide, seeds)
+            share = field.overlap(mode, points, match)
         else:
-            mode = refine_pose(field, points, predicted, information, match)
-            if field.overlap(mode, points, match) < match.min_overlap:
+            mode, share = match_pose(field, points, predicted, information, match)
+            if share < match.min_overlap:
                 mode = self._rescue(field, points, predicted, self.params.rescue_covariance)
-        accepted = field.overlap(mode, points, match) >= match.min_overlap
+                share = field.overlap(mode, points, match)
+        accepted = share >= match.min_overlap
         centre = mode if accepted else predicted
-        stencil = centre + STENCIL * self.params.kernel_step
-        log_tau = field.objective(stencil, points, predicted, information, match)
-        log_eta = float(log_tau.max() + np.log(np.exp(log_tau - log_tau.max()).sum()))
-        if not accepted:
-            return centre, log_eta, False
-        weights = np.exp(log_tau - log_eta)
-        spread = STENCIL * self.params.kernel_step
-        mean = weights @ spread
-        covariance = (spread - mean).T @ ((spread - mean) * weights[:, None]) + 1e-10 * np.eye(3)
-        pose = centre + self.rng.multivariate_normal(mean, covariance, method="eigh")
-        pose[2] = wrap_angle(pose[2])
-        return pose, log_eta, True
+        log_eta, mean, covariance = field.kernels.proposal(
+            *field.kernel_args,
+            points,
+            centre,
+            predicted,
+            information,
+            self.stencil,
+            match.sigma,
+            match.scale,
+            match.floor,
+        )
+        return Proposal(centre, log_eta, accepted, mean, covariance)
 
     def _rescue(
         self, field: LikelihoodField, points: np.ndarray, predicted: np.ndarray, covariance: np.ndarray
@@ -386,7 +422,7 @@ class GridSlam:
         radius = np.hypot(*rays.reach.T).max(initial=0.0)
         disc = predicted[:2] + np.array([[-radius, -radius], [radius, radius]])
         window = grid.window(*grid.tile_range(disc, self.params.window_margin))
-        field = LikelihoodField(window, self.params.match, self.params.window_margin)
+        field = LikelihoodField(window, self.params.match, self.params.window_margin, self.memo)
         if not field.has_occupied:
             return np.zeros((0, 3))
         candidates = self._search(field, points, predicted, self.params.every_scan_covariance)

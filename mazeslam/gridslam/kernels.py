@@ -11,21 +11,24 @@ occupied where its log-odds exceed ``threshold``.
 
 The kernels, in the order a scan uses them:
 
-1. ``occupied_blocks``: which ``BLOCK`` x ``BLOCK`` blocks of a window hold an occupied cell, so
-   that the distance search skips empty ones.
-2. ``nearest_occupied``: the exact Euclidean distance, in cells, from a cell's centre to the nearest
-   occupied cell's centre, searched where it is read (rings of cells near the cell, then the
-   non-empty blocks within the limit), truncated at ``limit`` cells. The same values as a distance
-   transform of the whole window (``cv2.distanceTransform``, ``DIST_MASK_PRECISE``) capped at the
-   limit, for the few hundred cells a scan match reads instead of every cell of the window.
-3. ``bilinear``: the distance (m) at a world point, bilinear between the four nearest cell
-   centres, and its gradient (the likelihood field's lookup).
-4. ``refine``: iteratively reweighted Gauss-Newton of a pose on that distance plus a Gaussian
-   prior (``mazeslam.gridslam.matching.refine_pose``).
-5. ``objective`` and ``overlap``: scores of poses, and the share of points near a wall.
-6. ``integrate``: a scan's free samples and hits added to a window (``integrate_scan``).
+1. ``any_occupied``: whether the window has an occupied cell to match against at all.
+2. ``lookup``: the distance (m) at world points, bilinear between the four nearest cell centres,
+   and its gradient (the likelihood field). A cell's distance is the exact Euclidean distance from
+   its centre to the nearest occupied cell's centre, capped at ``limit`` cells, searched the first
+   time a lookup reads it (``_search``: rings of cells around it, then the ``BLOCK`` x ``BLOCK``
+   blocks within the limit that hold an occupied cell). The same values as a distance transform of
+   the whole window (``cv2.distanceTransform``, ``DIST_MASK_PRECISE``) capped at the limit, for the
+   few thousand cells a scan match reads instead of every cell of the window.
+3. ``match``: ``refine`` (iteratively reweighted Gauss-Newton of a pose on that distance plus a
+   Gaussian prior, ``mazeslam.gridslam.matching.refine_pose``), then ``overlap`` (the share of
+   points near a wall) at the result.
+4. ``proposal``: the stencil's scores (``objective``) around the match, and their moments.
+5. ``integrate``: a scan's free samples and hits added to a window (``integrate_scan``).
 
-Distances are memoised per window in ``memo`` (X * Y,) float32, -1 where not computed yet.
+The distance kernels share their first arguments, the window and its memo: ``values`` (X, Y)
+float32, ``threshold``, ``blocks`` (the blocks' occupancy, int8, -1 not known yet), ``limit``
+(cells), ``memo`` float32 and ``stamps`` int64 (each >= X * Y, ``lookup``), ``stamp``, ``origin``
+(2,) m and ``resolution`` m.
 """
 
 from __future__ import annotations
@@ -42,16 +45,23 @@ NEAR_RINGS = 4
 
 
 @njit(cache=True)
-def occupied_blocks(values: np.ndarray, threshold: float) -> np.ndarray:
-    """Whether each ``BLOCK`` x ``BLOCK`` block of ``values`` (X, Y) holds a cell above
-    ``threshold``: bool (ceil(X / BLOCK), ceil(Y / BLOCK))."""
-    size_x, size_y = values.shape
-    blocks = np.zeros(((size_x + BLOCK - 1) // BLOCK, (size_y + BLOCK - 1) // BLOCK), dtype=np.bool_)
-    for i in range(size_x):
-        for j in range(size_y):
+def any_occupied(values: np.ndarray, threshold: float) -> bool:
+    """Whether a cell of ``values`` (X, Y) is above ``threshold`` (stops at the first)."""
+    for i in range(values.shape[0]):
+        for j in range(values.shape[1]):
             if values[i, j] > threshold:
-                blocks[i // BLOCK, j // BLOCK] = True
-    return blocks
+                return True
+    return False
+
+
+@njit(cache=True)
+def _block_state(values, threshold, low_a, high_a, low_b, high_b):
+    """1 if a cell of rows low_a..high_a, columns low_b..high_b (inclusive) is occupied, else 0."""
+    for a in range(low_a, high_a + 1):
+        for b in range(low_b, high_b + 1):
+            if values[a, b] > threshold:
+                return 1
+    return 0
 
 
 @njit(cache=True)
@@ -89,18 +99,21 @@ def _closer(value, threshold, i, j, a, b, best):
 @njit(cache=True)
 def _block_search(values, threshold, blocks, i, j, limit, best):
     """The least squared distance (cells) below ``best`` from cell (i, j) to an occupied cell of
-    the non-empty blocks within ``limit`` cells."""
+    the non-empty blocks within ``limit`` cells. ``blocks`` (ceil(X / BLOCK), ceil(Y / BLOCK)) int8
+    holds whether each block has an occupied cell (1) or not (0), -1 until a search first needs it."""
     size_x, size_y = values.shape
     reach = int(math.ceil(limit))
     for block_a in range(max((i - reach) // BLOCK, 0), min((i + reach) // BLOCK, blocks.shape[0] - 1) + 1):
         low_a, high_a = block_a * BLOCK, min(block_a * BLOCK + BLOCK, size_x) - 1
         gap_a = max(low_a - i, 0, i - high_a)
         for block_b in range(max((j - reach) // BLOCK, 0), min((j + reach) // BLOCK, blocks.shape[1] - 1) + 1):
-            if not blocks[block_a, block_b]:
-                continue
             low_b, high_b = block_b * BLOCK, min(block_b * BLOCK + BLOCK, size_y) - 1
             gap_b = max(low_b - j, 0, j - high_b)
             if gap_a * gap_a + gap_b * gap_b >= best:
+                continue
+            if blocks[block_a, block_b] < 0:
+                blocks[block_a, block_b] = _block_state(values, threshold, low_a, high_a, low_b, high_b)
+            if blocks[block_a, block_b] == 0:
                 continue
             for a in range(low_a, high_a + 1):
                 for b in range(low_b, high_b + 1):
@@ -118,10 +131,12 @@ def _search(values, threshold, blocks, limit, i, j):
 
 
 @njit(cache=True)
-def lookup(values, threshold, blocks, limit, memo, origin, resolution, world, distance, gradient):
+def lookup(values, threshold, blocks, limit, memo, stamps, stamp, origin, resolution, world, distance, gradient):
     """The distance (m) at world points ``world`` (N, 2), bilinear between the four nearest cell
     centres, into ``distance`` (N,), and its gradient (m/m) into ``gradient`` (N, 2). A cell's
-    distance is searched the first time it is read (``_search``) and kept in ``memo`` (X * Y,). A
+    distance is searched the first time it is read (``_search``) and kept in ``memo`` (>= X * Y,),
+    valid where ``stamps`` (>= X * Y,) holds this window's ``stamp`` (buffers reused from window to
+    window: they are never cleared). A
     point outside the window takes the border cells' values (the interpolation then extrapolates).
 
     One function for the whole batch of points: numba passes arrays to a compiled call with a
@@ -138,8 +153,9 @@ def lookup(values, threshold, blocks, limit, memo, origin, resolution, world, di
         j = min(max(int(base_y), 0), size_y - 2)
         for corner in range(4):
             a, b = i + (corner & 1), j + (corner >> 1)
-            if memo[a * size_y + b] < 0:
+            if stamps[a * size_y + b] != stamp:
                 memo[a * size_y + b] = _search(values, threshold, blocks, limit, a, b)
+                stamps[a * size_y + b] = stamp
         d00, d10 = memo[i * size_y + j] * scale, memo[(i + 1) * size_y + j] * scale
         d01, d11 = memo[i * size_y + j + 1] * scale, memo[(i + 1) * size_y + j + 1] * scale
         distance[k] = (d00 * (1 - fx) + d10 * fx) * (1 - fy) + (d01 * (1 - fx) + d11 * fx) * fy
@@ -180,6 +196,8 @@ def refine(
     blocks,
     limit,
     memo,
+    stamps,
+    stamp,
     origin,
     resolution,
     points,
@@ -204,7 +222,7 @@ def refine(
             place(np.array([0.0, 0.0, pose[2]]), points, arms)
             world[:, 0] = pose[0] + arms[:, 0]
             world[:, 1] = pose[1] + arms[:, 1]
-            lookup(values, threshold, blocks, limit, memo, origin, resolution, world, distance, gradient)
+            lookup(values, threshold, blocks, limit, memo, stamps, stamp, origin, resolution, world, distance, gradient)
             offset = pose - prior
             offset[2] = _wrap(offset[2])
             hessian = information.copy()
@@ -224,7 +242,22 @@ def refine(
 
 @njit(cache=True)
 def objective(
-    values, threshold, blocks, limit, memo, origin, resolution, poses, points, prior, information, sigma, scale, floor
+    values,
+    threshold,
+    blocks,
+    limit,
+    memo,
+    stamps,
+    stamp,
+    origin,
+    resolution,
+    poses,
+    points,
+    prior,
+    information,
+    sigma,
+    scale,
+    floor,
 ):
     """``log p(z | m, x) - 0.5 (x - prior)^T information (x - prior)`` (K,) at ``poses`` (K, 3) for
     end points ``points`` (N, 2) robot frame (the heading offset wrapped)."""
@@ -233,7 +266,7 @@ def objective(
     scores = np.empty(poses.shape[0])
     for p in range(poses.shape[0]):
         place(poses[p], points, world)
-        lookup(values, threshold, blocks, limit, memo, origin, resolution, world, distance, gradient)
+        lookup(values, threshold, blocks, limit, memo, stamps, stamp, origin, resolution, world, distance, gradient)
         total = 0.0
         for k in range(count):
             total += math.log(math.exp(-0.5 * (distance[k] / sigma) ** 2) + floor)
@@ -242,13 +275,110 @@ def objective(
 
 
 @njit(cache=True)
-def overlap(values, threshold, blocks, limit, memo, origin, resolution, pose, points, within):
+def overlap(values, threshold, blocks, limit, memo, stamps, stamp, origin, resolution, pose, points, within):
     """Share of ``points`` (N, 2) robot frame that lie within ``within`` m of an occupied cell at ``pose`` (3,)."""
     count = points.shape[0]
     world, distance, gradient = np.empty((count, 2)), np.empty(count), np.empty((count, 2))
     place(pose, points, world)
-    lookup(values, threshold, blocks, limit, memo, origin, resolution, world, distance, gradient)
+    lookup(values, threshold, blocks, limit, memo, stamps, stamp, origin, resolution, world, distance, gradient)
     return np.sum(distance <= within) / max(count, 1)
+
+
+@njit(cache=True)
+def match(
+    values,
+    threshold,
+    blocks,
+    limit,
+    memo,
+    stamps,
+    stamp,
+    origin,
+    resolution,
+    points,
+    prior,
+    information,
+    schedule,
+    iterations,
+    scale,
+    floor,
+    within,
+):
+    """``refine`` from the prior, then ``overlap`` at the refined pose: the pose (3,) and the share
+    of ``points`` (N, 2) within ``within`` m of an occupied cell there."""
+    pose = refine(
+        values,
+        threshold,
+        blocks,
+        limit,
+        memo,
+        stamps,
+        stamp,
+        origin,
+        resolution,
+        points,
+        prior,
+        information,
+        schedule,
+        iterations,
+        scale,
+        floor,
+        prior,
+    )
+    return pose, overlap(
+        values, threshold, blocks, limit, memo, stamps, stamp, origin, resolution, pose, points, within
+    )
+
+
+@njit(cache=True)
+def proposal(
+    values,
+    threshold,
+    blocks,
+    limit,
+    memo,
+    stamps,
+    stamp,
+    origin,
+    resolution,
+    points,
+    centre,
+    prior,
+    information,
+    steps,
+    sigma,
+    scale,
+    floor,
+):
+    """The improved proposal around ``centre`` (3,): the scores ``log tau_j`` (the likelihood of
+    ``points`` (N, 2) times the prior) of the poses ``centre + steps_j`` (``steps`` (K, 3)), their
+    normaliser ``log eta = log sum_j tau_j``, and the ``tau``-weighted mean (3,) and covariance (3, 3)
+    of the steps (plus 1e-10 on the diagonal)."""
+    scores = objective(
+        values,
+        threshold,
+        blocks,
+        limit,
+        memo,
+        stamps,
+        stamp,
+        origin,
+        resolution,
+        centre + steps,
+        points,
+        prior,
+        information,
+        sigma,
+        scale,
+        floor,
+    )
+    top = scores.max()
+    log_eta = top + math.log(np.sum(np.exp(scores - top)))
+    weights = np.exp(scores - log_eta)
+    mean = weights @ steps
+    spread = steps - mean
+    covariance = (spread * weights[:, None]).T @ spread + 1e-10 * np.eye(3)
+    return log_eta, mean, covariance
 
 
 @njit(cache=True)

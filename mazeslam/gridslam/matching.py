@@ -63,6 +63,22 @@ class MatchParams:
         require(0 <= self.min_overlap <= 1, "min_overlap must be a fraction")
 
 
+class DistanceMemo:
+    """Buffers for the cells' distances a ``LikelihoodField`` has computed, reused from field to
+    field so that none is cleared: a cell's distance (float32, cells) is valid where its stamp
+    (int64) is the field's."""
+
+    def __init__(self):
+        self.distances, self.stamps, self.stamp = np.empty(0, dtype=np.float32), np.empty(0, dtype=np.int64), 0
+
+    def claim(self, cells: int) -> tuple[np.ndarray, np.ndarray, int]:
+        """Buffers of at least ``cells`` and a new stamp (nothing in them is valid for it yet)."""
+        if len(self.distances) < cells:
+            self.distances, self.stamps = np.empty(cells, dtype=np.float32), np.zeros(cells, dtype=np.int64)
+        self.stamp += 1
+        return self.distances, self.stamps, self.stamp
+
+
 class LikelihoodField:
     """The distance (m) from a world point to the nearest occupied cell of ``window`` (log-odds above
     ``params.occupied_threshold``), at most ``reach`` m, bilinear between cell centres.
@@ -71,27 +87,31 @@ class LikelihoodField:
     transform of the whole window gives, capped at ``reach``; it is computed the first time a
     lookup reads the cell (``mazeslam.gridslam.kernels.lookup``) and kept, so a scan
     match pays for the few hundred cells around its end points, not for every cell of the window.
-    ``reach`` None: uncapped (the window's diagonal).
+    ``reach`` None: uncapped (the window's diagonal). ``memo``: buffers to reuse (one per filter;
+    a field's lookups are valid until the next field claims them).
     """
 
-    def __init__(self, window: Window, params: MatchParams, reach: float | None = None):
+    def __init__(
+        self, window: Window, params: MatchParams, reach: float | None = None, memo: DistanceMemo | None = None
+    ):
         from mazeslam.gridslam import kernels  # here, not at the top: numba loads only where the grid filter runs
 
         self.kernels: Any = kernels  # compiled functions: numba's dispatchers are not typed by their Python signature
         self.values = np.ascontiguousarray(window.values, dtype=np.float32)
         self.threshold = float(params.occupied_threshold)
-        self.blocks = kernels.occupied_blocks(self.values, self.threshold)
-        self.has_occupied = bool(self.blocks.any())
+        self.has_occupied = bool(kernels.any_occupied(self.values, self.threshold))
         self.origin = np.asarray(window.origin, dtype=float)
         self.resolution = float(window.resolution)
-        cap = float(np.hypot(*self.values.shape)) if reach is None else reach / self.resolution
-        self.limit = min(cap, float(np.hypot(*self.values.shape)))  # cells
-        self.memo = np.full(self.values.size, -1.0, dtype=np.float32)  # cells' distances, -1 not yet read
+        diagonal = float(np.hypot(*self.values.shape))
+        self.limit = diagonal if reach is None else min(reach / self.resolution, diagonal)  # cells
+        blocks_shape = -(-np.array(self.values.shape) // kernels.BLOCK)
+        self.blocks = np.full(blocks_shape, -1, dtype=np.int8)  # occupied blocks, found as searches need them
+        self.memo = (memo or DistanceMemo()).claim(self.values.size)
 
     @property
-    def _grid(self) -> tuple:
-        """The arguments every distance kernel starts with."""
-        return self.values, self.threshold, self.blocks, self.limit, self.memo, self.origin, self.resolution
+    def kernel_args(self) -> tuple:
+        """The arguments every distance kernel starts with (``mazeslam.gridslam.kernels``)."""
+        return self.values, self.threshold, self.blocks, self.limit, *self.memo, self.origin, self.resolution
 
     def occupied_points(self) -> np.ndarray:
         """World positions (M, 2) of the occupied cells' centres, m."""
@@ -102,14 +122,21 @@ class LikelihoodField:
         Points outside the window take the nearest border cells."""
         flat = np.ascontiguousarray(points, dtype=float).reshape(-1, 2)
         value, gradient = np.empty(len(flat)), np.empty((len(flat), 2))
-        self.kernels.lookup(*self._grid, flat, value, gradient)
+        self.kernels.lookup(*self.kernel_args, flat, value, gradient)
         return value.reshape(points.shape[:-1]), gradient.reshape(points.shape)
 
     def log_likelihood(self, poses: np.ndarray, points: np.ndarray, params: MatchParams) -> np.ndarray:
         """``log p(z | m, x)`` (K,) of end points ``points`` (N, 2) (robot frame) at ``poses`` (K, 3)."""
         poses = np.ascontiguousarray(poses, dtype=float)
         return self.kernels.objective(
-            *self._grid, poses, _points(points), np.zeros(3), np.zeros((3, 3)), params.sigma, params.scale, params.floor
+            *self.kernel_args,
+            poses,
+            _points(points),
+            np.zeros(3),
+            np.zeros((3, 3)),
+            params.sigma,
+            params.scale,
+            params.floor,
         )
 
     def objective(
@@ -129,7 +156,7 @@ class LikelihoodField:
     def overlap(self, pose: np.ndarray, points: np.ndarray, params: MatchParams) -> float:
         """Fraction of ``points`` (N, 2) (robot frame) within ``overlap_distance`` of an occupied cell."""
         pose = np.asarray(pose, dtype=float)
-        return float(self.kernels.overlap(*self._grid, pose, _points(points), params.overlap_distance))
+        return float(self.kernels.overlap(*self.kernel_args, pose, _points(points), params.overlap_distance))
 
 
 def _points(points: np.ndarray) -> np.ndarray:
@@ -161,7 +188,7 @@ def refine_pose(
     near a wall weigh ``1 / s^2``, points far from all walls nothing (``kernels.refine``).
     """
     return field.kernels.refine(
-        *field._grid,
+        *field.kernel_args,
         _points(points),
         np.asarray(prior, dtype=float),
         np.ascontiguousarray(prior_information, dtype=float),
@@ -171,3 +198,22 @@ def refine_pose(
         params.floor,
         np.array(prior if start is None else start, dtype=float),
     )
+
+
+def match_pose(
+    field: LikelihoodField, points: np.ndarray, prior: np.ndarray, prior_information: np.ndarray, params: MatchParams
+) -> tuple[np.ndarray, float]:
+    """``refine_pose`` from ``prior`` and the ``overlap`` of the result: the pose (3,) and the
+    share of ``points`` (N, 2) within ``overlap_distance`` of an occupied cell there."""
+    pose, share = field.kernels.match(
+        *field.kernel_args,
+        _points(points),
+        np.asarray(prior, dtype=float),
+        np.ascontiguousarray(prior_information, dtype=float),
+        np.asarray(params.sigma_schedule, dtype=float),
+        params.iterations,
+        params.scale,
+        params.floor,
+        params.overlap_distance,
+    )
+    return pose, float(share)
