@@ -23,6 +23,7 @@ import bench_command  # noqa: E402
 import bench_corners  # noqa: E402
 import bench_env  # noqa: E402
 import bench_fastslam  # noqa: E402
+import bench_grid  # noqa: E402
 import bench_laser  # noqa: E402
 import bench_scan_matching  # noqa: E402
 import bench_simulation  # noqa: E402
@@ -37,6 +38,7 @@ def benchmarks(folder: Path) -> list[tuple[str, Callable[[], Iterable[dict]]]]:
         ("simulation", bench_simulation.run),
         ("corner extraction", lambda: [bench_corners.speed(folder)]),
         ("FastSLAM", bench_fastslam.run),
+        ("grid filter", bench_grid.run),
         ("slam command", bench_command.run),
         ("laser odometry", bench_scan_matching.run),
         ("environment", lambda: [bench_env.run()]),

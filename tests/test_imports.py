@@ -50,3 +50,14 @@ def test_the_chi_square_bounds_written_out_are_scipys():
     from mazeslam.evaluation.consistency import OBSERVATION_BOUND_95, POSE_BOUND_95
 
     assert (POSE_BOUND_95, OBSERVATION_BOUND_95) == (chi2.ppf(0.95, 3), chi2.ppf(0.95, 2))
+
+
+def test_loading_a_grid_config_and_the_filter_module_does_not_load_numba():
+    printed = run_python(
+        "import sys\n"
+        "from mazeslam.pipeline import load_slam_config\n"
+        "import mazeslam.gridslam.filter\n"
+        "config = load_slam_config('configs/carmen.toml')\n"
+        "print(config.grid.particles, 'numba' in sys.modules)\n"
+    )
+    assert printed.split() == ["30", "False"]
