@@ -161,6 +161,23 @@ def _window_covariance(sigma: tuple) -> np.ndarray:
     return np.diag([xy**2, xy**2, theta**2])
 
 
+class GridDivergence(ValueError):
+    """The grid filter's numbers went bad: a particle's pose or weight that is not finite (a motion
+    or a scan the settings cannot take). A ``ValueError``: the command line prints it as one line."""
+
+
+def _check_finite(poses: np.ndarray, log_weights: np.ndarray, motion: np.ndarray) -> None:
+    """Raise ``GridDivergence``, in words, where a pose of ``poses`` (P, 3) or a weight of
+    ``log_weights`` (P,) is not finite after ``motion`` (3,)."""
+    bad_poses, bad_weights = np.sum(~np.isfinite(poses).all(axis=1)), np.sum(~np.isfinite(log_weights))
+    if bad_poses or bad_weights:
+        raise GridDivergence(
+            f"the grid filter diverged: {bad_poses} of {len(poses)} particles' poses and {bad_weights} weights are "
+            f"not finite after a motion of {np.round(motion, 4)} (m, m, rad); check the log's odometry there and "
+            "[grid] motion_noise"
+        )
+
+
 @dataclass(frozen=True)
 class ScanUpdate:
     """What one processed scan did to the cloud.
@@ -292,6 +309,7 @@ class GridSlam:
         offsets = self._searched_offsets(points, motion, rays) if self.search_every_scan else np.zeros((0, 3))
         count = len(self.poses)
         predicted = compose(self.poses, motion)  # (P, 3)
+        _check_finite(predicted, np.zeros(count), motion)
         normals = self.rng.standard_normal((count, 3))  # each particle's draw, in particle order
         log_etas, nis, matched = np.zeros(count), np.full(count, np.nan), 0
         weights = self.weights
@@ -313,6 +331,7 @@ class GridSlam:
             else:
                 self.poses[index] = self._unmatched_draw(index, motion, covariance, normals[index])
             grid.store(window, integrate_scan(window, rays, self.poses[index], self.params.grid))
+        _check_finite(self.poses, log_etas, motion)
         self.log_likelihoods += log_etas - log_etas.max()
         self.log_weights += (log_etas - log_etas.max()) / (self.params.observation_gain * count)
         return ScanUpdate(
@@ -594,7 +613,10 @@ def run_grid_slam(
         pending = compose(pending, motions[index])
         parents = np.arange(particles)
         if index == 0 or np.hypot(*pending[:2]) >= params.linear_update or abs(pending[2]) >= params.angular_update:
-            update = slam.process(course_log.values[records[index]], pending)
+            try:
+                update = slam.process(course_log.values[records[index]], pending)
+            except GridDivergence as error:
+                raise GridDivergence(f"{course_log.line_of(records[index])}: {error}") from None
             matched[index], nis[index], neff[index] = update.matched, update.nis, update.neff
             processed[index], pending = True, np.zeros(3)
             peak_map_bytes = max(peak_map_bytes, distinct_tile_bytes(slam.maps))

@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 
 from mazeslam.gridslam import GridSlam, GridSlamParams
-from mazeslam.gridslam.filter import ScanSensor, motion_nis
+from mazeslam.gridslam.filter import GridDivergence, ScanSensor, motion_nis
 
 BEARINGS = np.radians([-30.0, 0.0, 30.0])
 
@@ -39,3 +39,9 @@ def test_the_first_scan_spreads_the_particles_by_the_motion_noise_of_the_motion_
     spread = np.cov(slam.poses.T)
     assert np.allclose(slam.poses.mean(axis=0), [1.5, 1.0, 0.2], atol=0.01)
     assert np.allclose(np.diag(spread) / np.diag(stated), 1.0, atol=0.15)
+
+
+def test_a_motion_that_is_not_finite_is_reported_as_divergence_in_words():
+    slam = first_scan(particles=4, motion=np.zeros(3))
+    with pytest.raises(GridDivergence, match="diverged: 4 of 4 particles' poses .* check the log's odometry"):
+        slam.process(np.full(len(slam.sensor.bearings), 2.0), np.array([np.nan, 0.0, 0.0]))
