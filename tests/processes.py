@@ -4,8 +4,11 @@ waits there for its new parent to collect it)."""
 
 import os
 import signal
+import subprocess
 import time
 from pathlib import Path
+
+import pytest
 
 
 def running(pid: int) -> bool:
@@ -46,3 +49,14 @@ def kill_all(pids) -> None:
     for pid in pids:
         if running(pid):
             os.kill(pid, signal.SIGKILL)
+
+
+def wait_until(process: subprocess.Popen, condition, seconds: float = 120) -> None:
+    """Wait for ``condition()`` while ``process`` runs; fail the test (the process killed, its last
+    error output shown) if it ends first or ``seconds`` pass."""
+    deadline = time.monotonic() + seconds
+    while not condition():
+        if process.poll() is not None or time.monotonic() > deadline:
+            process.kill()
+            pytest.fail(f"ended early or hung (exit {process.wait()}): {process.stderr.read()[-2000:]}")
+        time.sleep(0.01)

@@ -34,10 +34,12 @@ def import_mrclam_command(dataset, robot, out):
     counts = import_mrclam(dataset, robot, out)
     skipped = ", ".join(f"{count} {reason}" for reason, count in counts["skipped"].items()) or "none"
     held = counts["outside_truth"]
+    reordered = ", ".join(f"{count} of {name}" for name, count in counts["sorted"].items())
     click.echo(
         f"wrote {out}: {counts['records']} records ({counts['odometry_records']} odometry, "
         f"{counts['landmark_records']} landmark observations); measurements left out: {skipped}"
         + (f"; {held} records lie outside the truth's time span and get the pose at its nearer end" if held else "")
+        + (f"; rows sorted into time order: {reordered}" if reordered else "")
     )
 
 

@@ -3,14 +3,15 @@ truth and map sidecars (and, with ``--plot``, a figure of the run)."""
 
 from __future__ import annotations
 
+import dataclasses
 from pathlib import Path
 
 import click
 
 from mazeslam.cli.options import BEAMS, DURATION, MAZE_SIDE, SEED
 from mazeslam.core.config import with_settings
-from mazeslam.core.outputs import prepare_output_file
-from mazeslam.data import log
+from mazeslam.core.outputs import prepare_output_file, staged_file
+from mazeslam.data import log, sidecars
 
 
 @click.command()
@@ -64,8 +65,12 @@ def simulate(out, seed, maze, rows, cols, duration, beams, config_path, commands
     prepare_output_file(out)
     if plot_path:
         prepare_output_file(plot_path)
-    result = run_simulation(
-        out, config=config, maze=maze, seed=seed, duration=duration, policy=policy, progress=not quiet
+    with staged_file(out) as staged:  # a full disk or an interrupt leaves the last log and sidecars as they were
+        result = run_simulation(
+            staged, config=config, maze=maze, seed=seed, duration=duration, policy=policy, progress=not quiet
+        )
+    result = dataclasses.replace(
+        result, log_path=out, truth_path=sidecars.truth_path(out), map_path=sidecars.map_path(out)
     )
     click.echo(
         f"wrote {result.log_path} ({len(result.times)} records, {result.times[-1]:.1f} s simulated), "
@@ -81,7 +86,6 @@ def simulate(out, seed, maze, rows, cols, duration, beams, config_path, commands
 
 def _plot_simulation(result, plot_path: Path) -> Path:
     from mazeslam.core.motion import dead_reckoning
-    from mazeslam.data import sidecars
     from mazeslam.viz.plots import plot_run
 
     world = sidecars.read_map(result.map_path)

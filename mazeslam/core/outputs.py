@@ -19,6 +19,7 @@ import tempfile
 import threading
 from collections.abc import Iterator
 from pathlib import Path
+from typing import TextIO
 
 try:
     import fcntl
@@ -90,6 +91,37 @@ def written(path: str | Path) -> Iterator[Path]:
     finally:
         with contextlib.suppress(OSError):
             temporary.unlink()  # gone already when it was renamed
+
+
+def write_line(handle: TextIO, path: str | Path, line: str) -> None:
+    """Append ``line`` and a newline to ``handle``, the open file ``path``, and flush it (a recording
+    keeps every line written); an ``OSError`` (a full disk) comes out as a ``WriteError`` naming ``path``."""
+    try:
+        handle.write(line + "\n")
+        handle.flush()
+    except OSError as error:
+        raise WriteError(path, error.strerror or str(error)) from error
+
+
+def close_written(handle: TextIO, path: str | Path) -> None:
+    """Close ``handle``, the open file ``path`` (``write_line``'s); a failed last flush is a
+    ``WriteError`` naming ``path``."""
+    try:
+        handle.close()
+    except OSError as error:
+        raise WriteError(path, error.strerror or str(error)) from error
+
+
+@contextlib.contextmanager
+def staged_file(path: str | Path) -> Iterator[Path]:
+    """``path`` and the files written beside it (a log's sidecars) whole or not at all: the block
+    writes the path it is given (``path``'s name in a staging folder beside it, ``staged_outputs``)
+    and its sidecars beside that; they replace ``path`` and its sidecars once the block ends
+    without error. An error or interrupt leaves the folder as it was; a ``WriteError`` names the
+    file it was to replace."""
+    path = Path(path)
+    with staged_outputs(path.parent if str(path.parent) else Path("."), ()) as staging:
+        yield staging / path.name
 
 
 def write_file(path: str | Path, content: str | bytes) -> Path:

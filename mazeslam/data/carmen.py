@@ -32,6 +32,7 @@ import numpy as np
 from mazeslam.core.beams import BeamGeometry
 from mazeslam.core.config import read_text
 from mazeslam.core.limits import MAX_BEAMS
+from mazeslam.core.outputs import staged_file
 from mazeslam.data.log import BYTE_ORDER_MARK, MAX_TIME, MAX_VALUE, LogFormatError
 
 
@@ -267,14 +268,23 @@ def import_carmen(path: str | Path, out: str | Path) -> dict:
     ``anchored_to_first_scan``) - a reference from a mapping run, not independent ground truth; the
     map sidecar says so and records the front laser's beam geometry. Returns counts.
     """
-    from mazeslam.core.geometry import relative
     from mazeslam.data import sidecars
-    from mazeslam.data.log import LogWriter, refuse_to_overwrite
+    from mazeslam.data.log import refuse_to_overwrite
 
     refuse_to_overwrite([path], [out, sidecars.truth_path(out), sidecars.map_path(out)])
     carmen = read_carmen(path)
+    with staged_file(out) as staged:  # a full disk or an interrupt leaves the last import as it was
+        return _write_import(carmen, path, staged)
+
+
+def _write_import(carmen: CarmenLog, path: str | Path, out: Path) -> dict:
+    """``import_carmen``'s writing: ``carmen`` (read from ``path``) as the course log ``out`` with its
+    truth and map sidecars; returns counts."""
+    from mazeslam.core.geometry import relative
+    from mazeslam.data import sidecars
+    from mazeslam.data.log import LogWriter
+
     max_range = carmen.max_range
-    out = Path(out)
     times, poses = [], []
     counts: Counter[str] = Counter()
     anchor = None  # the pose the current odometry stretch is measured from

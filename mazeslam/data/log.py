@@ -38,6 +38,7 @@ from typing import NamedTuple
 import numpy as np
 
 from mazeslam.core.config import read_text
+from mazeslam.core.outputs import close_written, write_line
 
 ODOMETRY = 0
 SCAN = 1
@@ -408,7 +409,7 @@ class LogWriter:
         self.close()
 
     def close(self) -> None:
-        self._file.close()
+        close_written(self._file, self.path)
 
     def write_odometry(self, t: float, distance: float, turn: float) -> None:
         """One odometry record: ``distance`` metres travelled and ``turn`` radians turned since the last."""
@@ -437,8 +438,7 @@ class LogWriter:
         if t < self.previous_time:
             raise ValueError(f"{self.path}: timestamp {t} is earlier than the previous record's {self.previous_time}")
         self.previous_time = t
-        self._file.write(line + "\n")
-        self._file.flush()
+        write_line(self._file, self.path, line)
 
 
 def refuse_to_overwrite(inputs, outputs) -> None:

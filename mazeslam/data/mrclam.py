@@ -15,6 +15,8 @@ counted, and truth that does not overlap the odometry at all is refused) and ``*
 the next; an odometry record is written at every odometry sample and right before every
 measurement, integrating the velocities exactly up to it.
 Measurements of other robots (subjects 1-5) and of unknown barcodes are left out and counted.
+Rows of the odometry, measurement and truth tables out of time order are sorted into it (stably)
+and counted; an empty table other than the measurements is refused.
 An output that is one of the input files is refused before anything is read.
 """
 
@@ -27,6 +29,7 @@ import numpy as np
 
 from mazeslam.core.config import read_text
 from mazeslam.core.geometry import wrap_angle
+from mazeslam.core.outputs import staged_file
 from mazeslam.data import sidecars
 from mazeslam.data.log import BYTE_ORDER_MARK, MAX_TIME, LogWriter, refuse_to_overwrite
 
@@ -43,8 +46,11 @@ def _table(folder: Path, name: str, columns: int) -> np.ndarray:
     if candidate is None:
         raise FileNotFoundError(f"{folder}: neither {name} nor {name}.gz found")
     text = read_text(candidate, "MRCLAM table").removeprefix(BYTE_ORDER_MARK)
+    rows = [line for line in text.splitlines() if line.split("#", 1)[0].strip()]
+    if not rows:  # (numpy would warn "input contained no data")
+        return np.empty((0, columns))
     try:
-        table = np.loadtxt(text.splitlines(), comments="#", ndmin=2)
+        table = np.loadtxt(rows, comments="#", ndmin=2)
     except ValueError as error:
         raise ValueError(f"{candidate}: {str(error)[:200]}") from error
     if table.shape[1] != columns:
@@ -65,9 +71,13 @@ def import_mrclam(folder: str | Path, robot: int, out: str | Path) -> dict:
         [folder / f"{name}{end}" for name in names for end in ("", ".gz")],
         [out, sidecars.truth_path(out), sidecars.map_path(out)],
     )
-    odometry, measurements, truth, landmarks, barcodes = (
-        _table(folder, name, columns) for name, columns in zip(names, (3, 4, 4, 5, 2))
-    )
+    tables = [_table(folder, name, columns) for name, columns in zip(names, (3, 4, 4, 5, 2))]
+    for name, table in zip(names, tables):
+        if not len(table) and name != names[1]:  # a robot may see nothing; it cannot have no odometry
+            raise ValueError(f"{_found(folder, name)}: holds no data rows")
+    reordered = {name: _out_of_order(table[:, 0]) for name, table in zip(names[:3], tables)}
+    odometry, measurements, truth = (table[np.argsort(table[:, 0], kind="stable")] for table in tables[:3])
+    landmarks, barcodes = tables[3:]
     subject_of = {int(barcode): int(subject) for subject, barcode in barcodes}
     skipped: Counter[str] = Counter()
     kept = []
@@ -84,6 +94,33 @@ def import_mrclam(folder: str | Path, robot: int, out: str | Path) -> dict:
     kept.sort()
     times = np.unique(np.concatenate([odometry[:, 0], [m[0] for m in kept]]))
     _check_overlap(_found(folder, names[2]) or folder / names[2], truth[:, 0], times)
+    with staged_file(out) as staged:  # a full disk or an interrupt leaves the last import as it was
+        record_times = _write_log(staged, times, odometry, kept)
+        poses = _interpolate_poses(truth, record_times)
+        sidecars.write_truth(sidecars.truth_path(staged), record_times, poses)
+        sidecars.write_map(
+            sidecars.map_path(staged),
+            walls=np.empty((0, 4)),
+            corners=landmarks[:, 1:3],
+            sensor={"kind": "landmark range and bearing (monocular camera with barcodes)"},
+            landmark_ids=landmarks[:, 0].astype(int).tolist(),
+            start_pose=poses[0].tolist(),
+            source={"dataset": str(folder), "robot": robot, "ground_truth": "Vicon motion capture"},
+        )
+    return {
+        "records": len(record_times),
+        "odometry_records": len(times),
+        "landmark_records": len(kept),
+        "skipped": dict(skipped),
+        "outside_truth": int(np.sum((record_times < truth[0, 0]) | (record_times > truth[-1, 0]))),
+        "sorted": {name: count for name, count in reordered.items() if count},
+    }
+
+
+def _write_log(out: Path, times: np.ndarray, odometry: np.ndarray, kept: list) -> np.ndarray:
+    """Write the course log ``out``: an odometry record at each of ``times`` (R,) (s), integrating
+    the velocity samples ``odometry`` (K, 3: t, m/s, rad/s; each holds until the next) up to it, and
+    after it the measurements ``kept`` (t, subject, m, rad) taken then. Returns every record's time."""
     records = []
     with LogWriter(out, beams=3) as writer:
         sample = 0
@@ -102,25 +139,13 @@ def import_mrclam(folder: str | Path, robot: int, out: str | Path) -> dict:
                 writer.write_landmark(t, measurement[1], measurement[2], measurement[3])
                 records.append(t)
                 measurement = next(pending, None)
-    record_times = np.array(records)
-    poses = _interpolate_poses(truth, record_times)
-    sidecars.write_truth(sidecars.truth_path(out), record_times, poses)
-    sidecars.write_map(
-        sidecars.map_path(out),
-        walls=np.empty((0, 4)),
-        corners=landmarks[:, 1:3],
-        sensor={"kind": "landmark range and bearing (monocular camera with barcodes)"},
-        landmark_ids=landmarks[:, 0].astype(int).tolist(),
-        start_pose=poses[0].tolist(),
-        source={"dataset": str(folder), "robot": robot, "ground_truth": "Vicon motion capture"},
-    )
-    return {
-        "records": len(records),
-        "odometry_records": len(times),
-        "landmark_records": len(kept),
-        "skipped": dict(skipped),
-        "outside_truth": int(np.sum((record_times < truth[0, 0]) | (record_times > truth[-1, 0]))),
-    }
+    return np.array(records)
+
+
+def _out_of_order(times: np.ndarray) -> int:
+    """How many of ``times`` (T,) (s) come after a later time: the rows the import puts back in time
+    order (a stable sort; the interpolation and the odometry's integration need rising times)."""
+    return int(np.sum(times < np.maximum.accumulate(times))) if len(times) else 0
 
 
 def _check_overlap(truth_file: Path, truth_times: np.ndarray, record_times: np.ndarray) -> None:

@@ -24,7 +24,7 @@ import numpy as np
 
 from mazeslam.core.beams import BeamGeometry
 from mazeslam.core.config import InputError, jsonable, read_text
-from mazeslam.core.outputs import write_file, written
+from mazeslam.core.outputs import close_written, write_file, write_line, written
 
 TRUTH_HEADER = "t,x,y,theta"
 MAP_FORMAT = "mazeslam-map"
@@ -62,16 +62,14 @@ class TruthWriter:
     def __init__(self, path: str | Path):
         self.path = Path(path)
         self._file = self.path.open("w")
-        self._file.write(TRUTH_HEADER + "\n")
-        self._file.flush()
+        write_line(self._file, self.path, TRUTH_HEADER)
 
     def write(self, t: float, pose) -> None:
         x, y, theta = (float(v) for v in pose)
-        self._file.write(f"{t:.6f},{x:.6f},{y:.6f},{theta:.6f}\n")
-        self._file.flush()
+        write_line(self._file, self.path, f"{t:.6f},{x:.6f},{y:.6f},{theta:.6f}")
 
     def close(self) -> None:
-        self._file.close()
+        close_written(self._file, self.path)
 
     def __enter__(self) -> TruthWriter:
         return self

@@ -98,8 +98,11 @@ def checked_actions(actions, space: spaces.Space, name: str = "action") -> np.nd
     naming them and the space otherwise (a NaN would otherwise reach the physics and the ray cast).
     Finite values outside ``space``'s bounds are kept: the envs clip them."""
     try:
-        values = np.asarray(actions, dtype=np.float64)
-    except (TypeError, ValueError) as error:
+        given = np.asarray(actions)
+        if np.iscomplexobj(given):  # numpy would drop the imaginary parts, with a warning
+            raise TypeError("complex numbers")
+        values = given.astype(np.float64)
+    except (TypeError, ValueError, OverflowError) as error:  # OverflowError: an integer beyond any float
         raise ValueError(f"{name} {_shown(actions)} is not an array of numbers: the action space is {space}") from error
     if values.shape != space.shape:
         raise ValueError(
@@ -121,6 +124,6 @@ def checked_actions(actions, space: spaces.Space, name: str = "action") -> np.nd
 
 
 def _shown(value, limit: int = 80) -> str:
-    """``repr(value)``, cut to ``limit`` characters."""
-    text = repr(value)
+    """``repr(value)`` on one line (a numpy array's spans several), cut to ``limit`` characters."""
+    text = " ".join(repr(value).split())
     return text if len(text) <= limit else text[: limit - 3] + "..."

@@ -22,7 +22,7 @@ from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space
 
 from mazeslam.core.geometry import wrap_angle
-from mazeslam.envs.drive_env import DriveEnv, checked_actions
+from mazeslam.envs.drive_env import DriveEnv, _shown, checked_actions
 from mazeslam.envs.maze_env import (
     WALL_SAMPLE_SPACING,
     check_maze_settings,
@@ -498,14 +498,26 @@ def box_muller(uniforms: np.ndarray) -> None:
 
 
 def _env_seeds(seed: int | list[int | None] | None, count: int) -> list[int | None]:
-    """One seed per env as ``SyncVectorEnv`` takes them: None, ``seed + i``, or a list."""
+    """One seed per env as ``SyncVectorEnv`` takes them: None, ``seed + i``, or a list of ``count``
+    seeds (each None or a whole number >= 0). A ``ValueError`` naming the seed otherwise, before any
+    env changes (a bad seed met while resetting env after env left the earlier ones reset)."""
     if seed is None:
         return [None] * count
-    if isinstance(seed, (int, np.integer)):
+    if isinstance(seed, (int, np.integer)) and _is_seed(seed):
         return [int(seed) + index for index in range(count)]
-    if len(seed) != count:
-        raise ValueError(f"seed lists must have num_envs={count} seeds, got {len(seed)}")
+    if not isinstance(seed, (list, tuple, np.ndarray)) or len(seed) != count:
+        raise ValueError(
+            f"seed must be None, a whole number >= 0 or a list of num_envs={count} seeds, got {_shown(seed)}"
+        )
+    bad = [value for value in seed if value is not None and not _is_seed(value)]
+    if bad:
+        raise ValueError(f"each seed of the list must be None or a whole number >= 0, got {_shown(bad[0])}")
     return [None if value is None else int(value) for value in seed]
+
+
+def _is_seed(value) -> bool:
+    """Whether ``value`` is a seed Gymnasium takes: a whole number >= 0 (not a bool)."""
+    return bool(isinstance(value, (int, np.integer)) and not isinstance(value, (bool, np.bool_)) and value >= 0)
 
 
 def _check_mask(mask, count: int) -> np.ndarray:

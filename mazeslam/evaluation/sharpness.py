@@ -138,6 +138,12 @@ def map_sharpness(
 def sharpness_lines(sharpness: dict[str, Sharpness], min_range: float, max_range: float) -> list[str]:
     """Lines for the terminal: a heading, then per path the counts, their ratio and the extents'."""
     return [
-        f"Map sharpness (scan returns of {min_range:g}-{max_range:g} m placed along each path; dead reckoning "
+        f"Map sharpness (scan returns {span_text(min_range, max_range)} placed along each path; dead reckoning "
         "leaves the glitches out):"
     ] + [value.describe(name) for name, value in sharpness.items()]
+
+
+def span_text(min_range: float, max_range: float) -> str:
+    """The ranges (m) of the returns used, in words: "of 0.05-0.4 m", or "from 0.02 m on" without an
+    upper bound (an infinite ``max_range``: no "inf" printed)."""
+    return f"of {min_range:g}-{max_range:g} m" if math.isfinite(max_range) else f"from {min_range:g} m on"

@@ -169,7 +169,8 @@ class MazeGrids:
         sensors = _Sensors(self, envs, x, y)
         up = direction > 0
         inverse = np.abs(direction, out=work.inverse, casting="same_kind")
-        np.divide(1, inverse, out=inverse)  # (2, R) m along the ray per m along each axis
+        with np.errstate(divide="ignore"):  # a component of exactly 0 (a ray along an axis) gives inf, capped next
+            np.divide(1, inverse, out=inverse)  # (2, R) m along the ray per m along each axis
         np.minimum(inverse, np.float32(1 / TINY_COMPONENT), out=inverse)
         # The sensor's ahead for each ray's sense, picked bit by bit (the float32 patterns of ahead
         # down, xor ahead up where up): (2, R) m along each axis to the first band crossing.

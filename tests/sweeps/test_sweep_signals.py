@@ -9,13 +9,12 @@ import json
 import signal
 import subprocess
 import sys
-import time
 from pathlib import Path
 
 import pandas as pd
 import pytest
 from conftest import PROJECT_ROOT
-from processes import children, ended_within, kill_all
+from processes import children, ended_within, kill_all, wait_until
 
 from mazeslam.sweeps.runner import RESULTS, SweepLock
 
@@ -44,15 +43,6 @@ def start(command: list[str]) -> subprocess.Popen:
     return subprocess.Popen(
         [*command, "--quiet"], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, cwd=PROJECT_ROOT
     )
-
-
-def wait_until(process: subprocess.Popen, condition, seconds: float = 120) -> None:
-    deadline = time.monotonic() + seconds
-    while not condition():
-        if process.poll() is not None or time.monotonic() > deadline:
-            process.kill()
-            pytest.fail(f"the sweep ended early or hung (exit {process.wait()}): {process.stderr.read()[-2000:]}")
-        time.sleep(0.01)
 
 
 @pytest.mark.slow  # about 3 s: the sweep starts (imports) before its workers
