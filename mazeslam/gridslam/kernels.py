@@ -267,11 +267,26 @@ def objective(
     for p in range(poses.shape[0]):
         place(poses[p], points, world)
         lookup(values, threshold, blocks, limit, memo, stamps, stamp, origin, resolution, world, distance, gradient)
-        total = 0.0
-        for k in range(count):
-            total += math.log(math.exp(-0.5 * (distance[k] / sigma) ** 2) + floor)
-        scores[p] = scale * total - 0.5 * _squared_norm(poses[p] - prior, information)
+        scores[p] = scale * _log_product(distance, sigma, floor) - 0.5 * _squared_norm(poses[p] - prior, information)
     return scores
+
+
+#: The running product of the points' likelihoods is rescaled below this, so that it cannot underflow.
+_SMALL, _LOG_SMALL = 1e-200, math.log(1e-200)
+
+
+@njit(cache=True)
+def _log_product(distance, sigma, floor):
+    """``sum_i log(exp(-d_i^2 / (2 sigma^2)) + floor)`` over ``distance`` (N,) m, as the log of the
+    product of its factors (each in [floor, 1 + floor]): one logarithm per stretch of factors
+    instead of one per point."""
+    product, total = 1.0, 0.0
+    for k in range(distance.shape[0]):
+        product *= math.exp(-0.5 * (distance[k] / sigma) ** 2) + floor
+        if product < _SMALL:
+            product /= _SMALL
+            total += _LOG_SMALL
+    return total + math.log(product)
 
 
 @njit(cache=True)
