@@ -319,7 +319,8 @@ class GridSlam:
             window = grid.window(*grid.tile_range(reach, self.params.window_margin))
             proposal = None
             if grid.tiles and len(points) >= 3:
-                field = LikelihoodField(window, self.params.match, self.params.window_margin, self.memo)
+                seen = np.vstack([transform_points(start, points) for start in starts])
+                field = LikelihoodField(window.crop(seen, self.params.window_margin), self.params.match, self.memo)
                 if field.has_occupied:
                     seeds = starts if self.search_every_scan else None
                     proposal = self._propose(field, points, predicted[index], information, seeds)
@@ -441,7 +442,7 @@ class GridSlam:
         radius = np.hypot(*rays.reach.T).max(initial=0.0)
         disc = predicted[:2] + np.array([[-radius, -radius], [radius, radius]])
         window = grid.window(*grid.tile_range(disc, self.params.window_margin))
-        field = LikelihoodField(window, self.params.match, self.params.window_margin, self.memo)
+        field = LikelihoodField(window, self.params.match, self.memo)
         if not field.has_occupied:
             return np.zeros((0, 3))
         candidates = self._search(field, points, predicted, self.params.every_scan_covariance)

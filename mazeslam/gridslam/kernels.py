@@ -97,27 +97,36 @@ def _closer(value, threshold, i, j, a, b, best):
 
 
 @njit(cache=True)
-def _block_search(values, threshold, blocks, i, j, limit, best):
-    """The least squared distance (cells) below ``best`` from cell (i, j) to an occupied cell of
-    the non-empty blocks within ``limit`` cells. ``blocks`` (ceil(X / BLOCK), ceil(Y / BLOCK)) int8
-    holds whether each block has an occupied cell (1) or not (0), -1 until a search first needs it."""
+def _block_search(values, threshold, blocks, i, j, best):
+    """The least squared distance (cells) below ``best`` from cell (i, j) to an occupied cell, over
+    the blocks in rings around the cell's block, nearest ring first, until a ring cannot hold a
+    nearer cell (ring ``r`` >= 1 is at least ``(r - 1) BLOCK + 1`` cells away). ``blocks``
+    (ceil(X / BLOCK), ceil(Y / BLOCK)) int8 holds whether each block has an occupied cell (1) or
+    not (0), -1 until a search first needs it."""
     size_x, size_y = values.shape
-    reach = int(math.ceil(limit))
-    for block_a in range(max((i - reach) // BLOCK, 0), min((i + reach) // BLOCK, blocks.shape[0] - 1) + 1):
-        low_a, high_a = block_a * BLOCK, min(block_a * BLOCK + BLOCK, size_x) - 1
-        gap_a = max(low_a - i, 0, i - high_a)
-        for block_b in range(max((j - reach) // BLOCK, 0), min((j + reach) // BLOCK, blocks.shape[1] - 1) + 1):
-            low_b, high_b = block_b * BLOCK, min(block_b * BLOCK + BLOCK, size_y) - 1
-            gap_b = max(low_b - j, 0, j - high_b)
-            if gap_a * gap_a + gap_b * gap_b >= best:
-                continue
-            if blocks[block_a, block_b] < 0:
-                blocks[block_a, block_b] = _block_state(values, threshold, low_a, high_a, low_b, high_b)
-            if blocks[block_a, block_b] == 0:
-                continue
-            for a in range(low_a, high_a + 1):
-                for b in range(low_b, high_b + 1):
-                    best = _closer(values[a, b], threshold, i, j, a, b, best)
+    centre_a, centre_b = i // BLOCK, j // BLOCK
+    for ring in range(max(blocks.shape[0], blocks.shape[1])):
+        nearest = (ring - 1) * BLOCK + 1
+        if ring >= 1 and nearest * nearest >= best:
+            break
+        for block_a in range(max(centre_a - ring, 0), min(centre_a + ring, blocks.shape[0] - 1) + 1):
+            edge = block_a == centre_a - ring or block_a == centre_a + ring
+            step = 1 if edge or ring == 0 else 2 * ring
+            for block_b in range(centre_b - ring, centre_b + ring + 1, step):
+                if block_b < 0 or block_b >= blocks.shape[1]:
+                    continue
+                low_a, high_a = block_a * BLOCK, min(block_a * BLOCK + BLOCK, size_x) - 1
+                low_b, high_b = block_b * BLOCK, min(block_b * BLOCK + BLOCK, size_y) - 1
+                gap_a, gap_b = max(low_a - i, 0, i - high_a), max(low_b - j, 0, j - high_b)
+                if gap_a * gap_a + gap_b * gap_b >= best:
+                    continue
+                if blocks[block_a, block_b] < 0:
+                    blocks[block_a, block_b] = _block_state(values, threshold, low_a, high_a, low_b, high_b)
+                if blocks[block_a, block_b] == 0:
+                    continue
+                for a in range(low_a, high_a + 1):
+                    for b in range(low_b, high_b + 1):
+                        best = _closer(values[a, b], threshold, i, j, a, b, best)
     return best
 
 
@@ -126,7 +135,7 @@ def _search(values, threshold, blocks, limit, i, j):
     """The distance (cells, float32) from cell (i, j) to the nearest occupied cell, at most ``limit``."""
     best = _ring_search(values, threshold, i, j, NEAR_RINGS, limit * limit)
     if best > (NEAR_RINGS + 1) * (NEAR_RINGS + 1):  # a nearer cell may lie beyond the rings searched
-        best = _block_search(values, threshold, blocks, i, j, limit, best)
+        best = _block_search(values, threshold, blocks, i, j, best)
     return np.float32(math.sqrt(best))
 
 

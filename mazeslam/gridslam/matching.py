@@ -1,8 +1,8 @@
 """Scan matching against an occupancy grid: a likelihood field and Gauss-Newton on it.
 
 The field is the distance ``d`` (m) from a point to the nearest occupied cell (log-odds above
-``occupied_threshold``) of a window of the map, exact between cell centres and capped at a reach,
-computed where a lookup reads it. A scan's end points at a robot pose score
+``occupied_threshold``) of a window of the map, exact between cell centres, computed where a lookup
+reads it. A scan's end points at a robot pose score
 
     log p(z | m, x) = scale * sum_i log(exp(-d_i^2 / (2 sigma^2)) + floor)
 
@@ -81,29 +81,26 @@ class DistanceMemo:
 
 class LikelihoodField:
     """The distance (m) from a world point to the nearest occupied cell of ``window`` (log-odds above
-    ``params.occupied_threshold``), at most ``reach`` m, bilinear between cell centres.
+    ``params.occupied_threshold``), bilinear between cell centres.
 
     A cell's distance is the exact Euclidean distance between cell centres, what a distance
-    transform of the whole window gives, capped at ``reach``; it is computed the first time a
-    lookup reads the cell (``mazeslam.gridslam.kernels.lookup``) and kept, so a scan
-    match pays for the few hundred cells around its end points, not for every cell of the window.
-    ``reach`` None: uncapped (the window's diagonal). ``memo``: buffers to reuse (one per filter;
-    a field's lookups are valid until the next field claims them).
+    transform of the whole window gives (OpenCV's ``distanceTransform``, ``DIST_MASK_PRECISE``); it
+    is computed the first time a lookup reads the cell (``mazeslam.gridslam.kernels.lookup``) and
+    kept, so a scan match pays for the few thousand cells around its end points, not for every cell
+    of the window. ``memo``: buffers to reuse (one per filter; a field's lookups are valid until the
+    next field claims them).
     """
 
-    def __init__(
-        self, window: Window, params: MatchParams, reach: float | None = None, memo: DistanceMemo | None = None
-    ):
+    def __init__(self, window: Window, params: MatchParams, memo: DistanceMemo | None = None):
         from mazeslam.gridslam import kernels  # here, not at the top: numba loads only where the grid filter runs
 
         self.kernels: Any = kernels  # compiled functions: numba's dispatchers are not typed by their Python signature
-        self.values = np.ascontiguousarray(window.values, dtype=np.float32)
+        self.values = window.values  # float32, (X, Y); a view into a larger window is read in place
         self.threshold = float(params.occupied_threshold)
         self.has_occupied = bool(kernels.any_occupied(self.values, self.threshold))
         self.origin = np.asarray(window.origin, dtype=float)
         self.resolution = float(window.resolution)
-        diagonal = float(np.hypot(*self.values.shape))
-        self.limit = diagonal if reach is None else min(reach / self.resolution, diagonal)  # cells
+        self.limit = float(np.hypot(*self.values.shape))  # cells: no cell of the window is farther
         blocks_shape = -(-np.array(self.values.shape) // kernels.BLOCK)
         self.blocks = np.full(blocks_shape, -1, dtype=np.int8)  # occupied blocks, found as searches need them
         self.memo = (memo or DistanceMemo()).claim(self.values.size)

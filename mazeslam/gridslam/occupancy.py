@@ -139,6 +139,20 @@ class Window:
     resolution: float
     lower_tile: np.ndarray
 
+    def crop(self, points: np.ndarray, margin: float) -> Window:
+        """A view of the cells around ``points`` (N, 2) (world, m) widened by ``margin`` m, within
+        this window; for reading only (``TiledGrid.store`` takes whole windows)."""
+        low = np.floor((points.min(axis=0) - margin - self.origin) / self.resolution).astype(int)
+        high = np.ceil((points.max(axis=0) + margin - self.origin) / self.resolution).astype(int)
+        low = np.clip(low, 0, np.array(self.values.shape) - 2)
+        high = np.clip(high, low + 2, self.values.shape)
+        return Window(
+            self.values[low[0] : high[0], low[1] : high[1]],
+            self.origin + low * self.resolution,
+            self.resolution,
+            self.lower_tile,
+        )
+
 
 @dataclass(frozen=True)
 class ScanRays:

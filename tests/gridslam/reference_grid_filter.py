@@ -3,13 +3,8 @@ numpy for the scan match and the ray integration, and OpenCV's distance transfor
 each scan for the likelihood field. The oracle the compiled filter is checked against
 (tests/gridslam/test_grid_kernels.py) and its speed baseline (benchmarks/bench_grid.py).
 
-``ReferenceGridSlam(params, start_pose, sensor, field_area=...)`` subclasses ``GridSlam`` only to
-share its state, its resampling and its cloud; the scan update is the old one. ``field_area``:
-
-- ``"crop"``: the field over the end points' bounding box widened by ``window_margin``, uncapped
-  (the filter as it was);
-- ``"window"``: the field over the whole map window the scan reads, capped at ``window_margin``
-  (what the compiled filter computes: the same maths, for equality tests).
+``ReferenceGridSlam(params, start_pose, sensor)`` subclasses ``GridSlam`` only to share its state,
+its resampling and its cloud; the scan update is the old one.
 """
 
 from __future__ import annotations
@@ -28,16 +23,13 @@ from mazeslam.registration.correlative import LikelihoodGrid, correlative_candid
 class ReferenceField:
     """The distance (m) from each cell of ``window`` to its nearest occupied cell, interpolated."""
 
-    def __init__(self, window: Window, params: MatchParams, cap: float | None = None):
+    def __init__(self, window: Window, params: MatchParams):
         import cv2  # here, not at the top: the slam config names the grid's settings, and OpenCV is slow to load
 
         self.occupied = window.values > params.occupied_threshold
         free = (~self.occupied).astype(np.uint8)
         self.has_occupied = bool(self.occupied.any())
-        distance = cv2.distanceTransform(free, cv2.DIST_L2, cv2.DIST_MASK_PRECISE)
-        if cap is not None:  # cells
-            distance = np.minimum(distance, np.float32(cap / window.resolution))
-        self.distance = distance * window.resolution
+        self.distance = cv2.distanceTransform(free, cv2.DIST_L2, cv2.DIST_MASK_PRECISE) * window.resolution
         self.origin, self.resolution = window.origin, window.resolution
 
     def occupied_points(self) -> np.ndarray:
@@ -92,21 +84,6 @@ class ReferenceField:
         """Fraction of ``points`` (N, 2) (robot frame) within ``overlap_distance`` of an occupied cell."""
         distance, _ = self.lookup(transform_points(pose, points))
         return float(np.mean(distance <= params.overlap_distance))
-
-
-def crop(window: Window, points: np.ndarray, margin: float) -> Window:
-    """A view of the cells around ``points`` (N, 2) (world, m) widened by ``margin`` m, within
-    this window; for reading only (``TiledGrid.store`` takes whole windows)."""
-    low = np.floor((points.min(axis=0) - margin - window.origin) / window.resolution).astype(int)
-    high = np.ceil((points.max(axis=0) + margin - window.origin) / window.resolution).astype(int)
-    low = np.clip(low, 0, np.array(window.values.shape) - 2)
-    high = np.clip(high, low + 2, window.values.shape)
-    return Window(
-        window.values[low[0] : high[0], low[1] : high[1]],
-        window.origin + low * window.resolution,
-        window.resolution,
-        window.lower_tile,
-    )
 
 
 def cells(window: Window, points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -171,16 +148,6 @@ def integrate_scan(window: Window, rays: ScanRays, pose: np.ndarray, params: Gri
 class ReferenceGridSlam(GridSlam):
     """The grid filter's scan update as a Python loop over particles (see the module docstring)."""
 
-    def __init__(self, params, start_pose, sensor, field_area: str = "crop"):
-        super().__init__(params, start_pose, sensor)
-        self.field_area = field_area
-
-    def _field(self, window: Window, seen: np.ndarray) -> ReferenceField:
-        """The likelihood field for end points ``seen`` (N, 2) (world) in ``window``."""
-        if self.field_area == "crop":
-            return ReferenceField(crop(window, seen, self.params.window_margin), self.params.match)
-        return ReferenceField(window, self.params.match, self.params.window_margin)
-
     def process(self, ranges: np.ndarray, motion: np.ndarray) -> ScanUpdate:
         """Move every particle by ``motion`` (3,) (robot frame, since the last processed scan) with
         the improved proposal, weigh it, add the scan (``ranges`` (N,) m) to its map and resample
@@ -201,7 +168,7 @@ class ReferenceGridSlam(GridSlam):
             window = grid.window(*grid.tile_range(reach, self.params.window_margin))
             if grid.tiles and len(points) >= 3:
                 seen = np.vstack([transform_points(start, points) for start in starts])
-                field = self._field(window, seen)
+                field = ReferenceField(window.crop(seen, self.params.window_margin), self.params.match)
                 if field.has_occupied:
                     pose, log_etas[index], accepted = self._propose(
                         field, points, predicted, information, starts if self.search_every_scan else None
@@ -322,14 +289,8 @@ class ReferenceGridSlam(GridSlam):
             return np.zeros((0, 3))
         radius = np.hypot(*rays.reach.T).max(initial=0.0)
         disc = predicted[:2] + np.array([[-radius, -radius], [radius, radius]])
-        window = grid.window(*grid.tile_range(disc, self.params.window_margin))
-        field = self._field(window, window_points(window))
+        field = ReferenceField(grid.window(*grid.tile_range(disc, self.params.window_margin)), self.params.match)
         if not field.has_occupied:
             return np.zeros((0, 3))
         candidates = self._search(field, points, predicted, self.params.every_scan_covariance)
         return relative(predicted, candidates).reshape(-1, 3)
-
-
-def window_points(window: Window) -> np.ndarray:
-    """The corners (2, 2) of ``window``, world frame, m: a crop around them is the whole window."""
-    return window.origin + np.array([[0, 0], window.values.shape]) * window.resolution

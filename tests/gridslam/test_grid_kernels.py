@@ -35,11 +35,11 @@ def walls_window(seed: int, shape=(128, 192), walls: int = 6) -> Window:
     return Window(values, np.array([-1.3, 2.7]), RESOLUTION, np.array([0, 0]))
 
 
-@pytest.mark.parametrize("seed", range(4))
-@pytest.mark.parametrize("reach", [0.15, 0.5, 1.5, None])
-def test_the_distance_at_every_cell_is_the_capped_distance_transform(seed, reach):
-    window = walls_window(seed)
-    field, reference = LikelihoodField(window, MATCH, reach), ReferenceField(window, MATCH, reach)
+@pytest.mark.parametrize("seed", range(6))
+@pytest.mark.parametrize("walls", [0, 1, 6])
+def test_the_distance_at_every_cell_is_the_distance_transform(seed, walls):
+    window = walls_window(seed, walls=walls)  # 0 walls: one occupied cell, far from most
+    field, reference = LikelihoodField(window, MATCH), ReferenceField(window, MATCH)
     i, j = np.indices(window.values.shape[:2]).reshape(2, -1)
     centres = window.origin + (np.column_stack([i, j]) + 0.5) * RESOLUTION
     inside = (i < window.values.shape[0] - 1) & (j < window.values.shape[1] - 1)  # read as corner (0, 0)
@@ -52,7 +52,7 @@ def test_the_distance_at_every_cell_is_the_capped_distance_transform(seed, reach
 def test_lookups_anywhere_match_the_reference_bilinear_field(seed):
     window = walls_window(seed)
     points = np.random.default_rng(seed).uniform(-3, 12, (2000, 2))  # inside the window and beyond it
-    field, reference = LikelihoodField(window, MATCH, 1.5), ReferenceField(window, MATCH, 1.5)
+    field, reference = LikelihoodField(window, MATCH), ReferenceField(window, MATCH)
     for got, expected in zip(field.lookup(points), reference.lookup(points)):
         np.testing.assert_allclose(got, expected, rtol=0, atol=1e-12)
 
@@ -67,7 +67,7 @@ def scan_points(seed: int, count: int = 150) -> np.ndarray:
 @pytest.mark.parametrize("seed", range(4))
 def test_refinement_scores_and_overlap_match_the_reference(seed):
     window, points = walls_window(seed), scan_points(seed)
-    field, reference = LikelihoodField(window, MATCH, 1.5), ReferenceField(window, MATCH, 1.5)
+    field, reference = LikelihoodField(window, MATCH), ReferenceField(window, MATCH)
     prior = np.array([3.1, 6.2, 0.4])
     information = np.diag([1 / 0.05**2, 1 / 0.05**2, 1 / 0.02**2])
     start = prior + [0.04, -0.03, 0.01]
@@ -114,13 +114,10 @@ def run_with(slam_type, building_log, params: GridSlamParams):
 
 @pytest.mark.parametrize("search", [SearchMode.FAILED_MATCH, SearchMode.EVERY_SCAN])
 def test_the_compiled_filter_runs_as_the_reference_with_the_same_seed(building_log, search):
+    """The same path, weights, resamplings and map as the filter written before the kernels."""
     params = GridSlamParams(particles=6, seed=3, search=search)
     compiled = run_with(filter.GridSlam, building_log, params)
-    reference = run_with(
-        lambda *args: ReferenceGridSlam(*args, field_area="window"),
-        building_log,
-        params,
-    )
+    reference = run_with(ReferenceGridSlam, building_log, params)
     assert compiled.processed.sum() > 20
     np.testing.assert_allclose(compiled.best_poses, reference.best_poses, rtol=0, atol=1e-6)
     np.testing.assert_allclose(compiled.particles.log_weights, reference.particles.log_weights, atol=1e-6)
