@@ -14,11 +14,11 @@ The kernels, in the order a scan uses them:
 1. ``any_occupied``: whether the window has an occupied cell to match against at all.
 2. ``lookup``: the distance (m) at world points, bilinear between the four nearest cell centres,
    and its gradient (the likelihood field). A cell's distance is the exact Euclidean distance from
-   its centre to the nearest occupied cell's centre, capped at ``limit`` cells, searched the first
-   time a lookup reads it (``_search``: rings of cells around it, then the ``BLOCK`` x ``BLOCK``
-   blocks within the limit that hold an occupied cell). The same values as a distance transform of
-   the whole window (``cv2.distanceTransform``, ``DIST_MASK_PRECISE``) capped at the limit, for the
-   few thousand cells a scan match reads instead of every cell of the window.
+   its centre to the nearest occupied cell's centre, searched the first time a lookup reads it
+   (``_search``: rings of cells around it, then rings of ``BLOCK`` x ``BLOCK`` blocks that hold an
+   occupied cell, nearest first). The same values as a distance transform of the whole window
+   (``cv2.distanceTransform``, ``DIST_MASK_PRECISE``), for the few thousand cells a scan match
+   reads instead of every cell of the window.
 3. ``match``: ``refine`` (iteratively reweighted Gauss-Newton of a pose on that distance plus a
    Gaussian prior, ``mazeslam.gridslam.matching.refine_pose``), then ``overlap`` (the share of
    points near a wall) at the result.
@@ -26,9 +26,9 @@ The kernels, in the order a scan uses them:
 5. ``integrate``: a scan's free samples and hits added to a window (``integrate_scan``).
 
 The distance kernels share their first arguments, the window and its memo: ``values`` (X, Y)
-float32, ``threshold``, ``blocks`` (the blocks' occupancy, int8, -1 not known yet), ``limit``
-(cells), ``memo`` float32 and ``stamps`` int64 (each >= X * Y, ``lookup``), ``stamp``, ``origin``
-(2,) m and ``resolution`` m.
+float32, ``threshold``, ``blocks`` (the blocks' occupancy, int8, -1 not known yet), ``memo``
+float32 and ``stamps`` int64 (each >= X * Y, ``lookup``), ``stamp``, ``origin`` (2,) m and
+``resolution`` m.
 """
 
 from __future__ import annotations
@@ -131,16 +131,16 @@ def _block_search(values, threshold, blocks, i, j, best):
 
 
 @njit(cache=True)
-def _search(values, threshold, blocks, limit, i, j):
-    """The distance (cells, float32) from cell (i, j) to the nearest occupied cell, at most ``limit``."""
-    best = _ring_search(values, threshold, i, j, NEAR_RINGS, limit * limit)
+def _search(values, threshold, blocks, i, j):
+    """The distance (cells, float32) from cell (i, j) to the nearest occupied cell (inf if none)."""
+    best = _ring_search(values, threshold, i, j, NEAR_RINGS, math.inf)
     if best > (NEAR_RINGS + 1) * (NEAR_RINGS + 1):  # a nearer cell may lie beyond the rings searched
         best = _block_search(values, threshold, blocks, i, j, best)
     return np.float32(math.sqrt(best))
 
 
 @njit(cache=True)
-def lookup(values, threshold, blocks, limit, memo, stamps, stamp, origin, resolution, world, distance, gradient):
+def lookup(values, threshold, blocks, memo, stamps, stamp, origin, resolution, world, distance, gradient):
     """The distance (m) at world points ``world`` (N, 2), bilinear between the four nearest cell
     centres, into ``distance`` (N,), and its gradient (m/m) into ``gradient`` (N, 2). A cell's
     distance is searched the first time it is read (``_search``) and kept in ``memo`` (>= X * Y,),
@@ -163,7 +163,7 @@ def lookup(values, threshold, blocks, limit, memo, stamps, stamp, origin, resolu
         for corner in range(4):
             a, b = i + (corner & 1), j + (corner >> 1)
             if stamps[a * size_y + b] != stamp:
-                memo[a * size_y + b] = _search(values, threshold, blocks, limit, a, b)
+                memo[a * size_y + b] = _search(values, threshold, blocks, a, b)
                 stamps[a * size_y + b] = stamp
         d00, d10 = memo[i * size_y + j] * scale, memo[(i + 1) * size_y + j] * scale
         d01, d11 = memo[i * size_y + j + 1] * scale, memo[(i + 1) * size_y + j + 1] * scale
@@ -203,7 +203,6 @@ def refine(
     values,
     threshold,
     blocks,
-    limit,
     memo,
     stamps,
     stamp,
@@ -231,7 +230,7 @@ def refine(
             place(np.array([0.0, 0.0, pose[2]]), points, arms)
             world[:, 0] = pose[0] + arms[:, 0]
             world[:, 1] = pose[1] + arms[:, 1]
-            lookup(values, threshold, blocks, limit, memo, stamps, stamp, origin, resolution, world, distance, gradient)
+            lookup(values, threshold, blocks, memo, stamps, stamp, origin, resolution, world, distance, gradient)
             offset = pose - prior
             offset[2] = _wrap(offset[2])
             hessian = information.copy()
@@ -254,7 +253,6 @@ def objective(
     values,
     threshold,
     blocks,
-    limit,
     memo,
     stamps,
     stamp,
@@ -275,7 +273,7 @@ def objective(
     scores = np.empty(poses.shape[0])
     for p in range(poses.shape[0]):
         place(poses[p], points, world)
-        lookup(values, threshold, blocks, limit, memo, stamps, stamp, origin, resolution, world, distance, gradient)
+        lookup(values, threshold, blocks, memo, stamps, stamp, origin, resolution, world, distance, gradient)
         scores[p] = scale * _log_product(distance, sigma, floor) - 0.5 * _squared_norm(poses[p] - prior, information)
     return scores
 
@@ -299,12 +297,12 @@ def _log_product(distance, sigma, floor):
 
 
 @njit(cache=True)
-def overlap(values, threshold, blocks, limit, memo, stamps, stamp, origin, resolution, pose, points, within):
+def overlap(values, threshold, blocks, memo, stamps, stamp, origin, resolution, pose, points, within):
     """Share of ``points`` (N, 2) robot frame that lie within ``within`` m of an occupied cell at ``pose`` (3,)."""
     count = points.shape[0]
     world, distance, gradient = np.empty((count, 2)), np.empty(count), np.empty((count, 2))
     place(pose, points, world)
-    lookup(values, threshold, blocks, limit, memo, stamps, stamp, origin, resolution, world, distance, gradient)
+    lookup(values, threshold, blocks, memo, stamps, stamp, origin, resolution, world, distance, gradient)
     return np.sum(distance <= within) / max(count, 1)
 
 
@@ -313,7 +311,6 @@ def match(
     values,
     threshold,
     blocks,
-    limit,
     memo,
     stamps,
     stamp,
@@ -334,7 +331,6 @@ def match(
         values,
         threshold,
         blocks,
-        limit,
         memo,
         stamps,
         stamp,
@@ -349,9 +345,7 @@ def match(
         floor,
         prior,
     )
-    return pose, overlap(
-        values, threshold, blocks, limit, memo, stamps, stamp, origin, resolution, pose, points, within
-    )
+    return pose, overlap(values, threshold, blocks, memo, stamps, stamp, origin, resolution, pose, points, within)
 
 
 @njit(cache=True)
@@ -359,7 +353,6 @@ def proposal(
     values,
     threshold,
     blocks,
-    limit,
     memo,
     stamps,
     stamp,
@@ -382,7 +375,6 @@ def proposal(
         values,
         threshold,
         blocks,
-        limit,
         memo,
         stamps,
         stamp,

@@ -100,7 +100,6 @@ class LikelihoodField:
         self.has_occupied = bool(kernels.any_occupied(self.values, self.threshold))
         self.origin = np.asarray(window.origin, dtype=float)
         self.resolution = float(window.resolution)
-        self.limit = float(np.hypot(*self.values.shape))  # cells: no cell of the window is farther
         blocks_shape = -(-np.array(self.values.shape) // kernels.BLOCK)
         self.blocks = np.full(blocks_shape, -1, dtype=np.int8)  # occupied blocks, found as searches need them
         self.memo = (memo or DistanceMemo()).claim(self.values.size)
@@ -108,7 +107,7 @@ class LikelihoodField:
     @property
     def kernel_args(self) -> tuple:
         """The arguments every distance kernel starts with (``mazeslam.gridslam.kernels``)."""
-        return self.values, self.threshold, self.blocks, self.limit, *self.memo, self.origin, self.resolution
+        return self.values, self.threshold, self.blocks, *self.memo, self.origin, self.resolution
 
     def occupied_points(self) -> np.ndarray:
         """World positions (M, 2) of the occupied cells' centres, m."""
