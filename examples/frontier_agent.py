@@ -21,10 +21,12 @@ from collections import deque
 
 import gymnasium as gym
 import numpy as np
+from tqdm.auto import tqdm
 
 import mazeslam  # noqa: F401  (registers the environments)
 from mazeslam.envs.wrappers import RecordCourseLog
 from mazeslam.sim.policies import DriveParams, steer_to
+from mazeslam.viz import backends
 
 DIRECTIONS = {(0, 1): 0.0, (1, 0): np.pi / 2, (0, -1): np.pi, (-1, 0): -np.pi / 2}  # (d_row, d_col): world angle
 
@@ -107,7 +109,9 @@ def main():
         help="record the episode as an MP4 into FOLDER (needs moviepy: pip install 'mazeslam[video]')",
     )
     args = parser.parse_args()
-    render_mode = "human" if args.render else "rgb_array" if args.video else None
+    render_mode, note = backends.render_mode(args.render, bool(args.video))
+    if note:
+        print(note)
     env = gym.make(
         "mazeslam/Maze-v0", rows=args.rows, cols=args.cols, max_episode_steps=args.steps, render_mode=render_mode
     )
@@ -118,7 +122,7 @@ def main():
     observation, info = env.reset(seed=args.seed)
     agent = FrontierAgent(env)
     total, steps_taken = 0.0, 0
-    for _ in range(args.steps):
+    for _ in tqdm(range(args.steps), desc="steps", unit="step", leave=False):
         observation, reward, terminated, truncated, info = env.step(agent(observation, info))
         steps_taken += 1
         total += reward

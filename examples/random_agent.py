@@ -9,8 +9,10 @@ folder (Gymnasium's RecordVideo; needs `pip install 'mazeslam[video]'`, which br
 import argparse
 
 import gymnasium as gym
+from tqdm.auto import tqdm
 
 import mazeslam  # noqa: F401  (registers the environments)
+from mazeslam.viz import backends
 
 
 def main():
@@ -20,14 +22,16 @@ def main():
     parser.add_argument("--render", action="store_true", help="show the agent in a window as it drives")
     parser.add_argument("--video", metavar="FOLDER", help="record the episode as an MP4 into FOLDER (needs moviepy)")
     args = parser.parse_args()
-    render_mode = "human" if args.render else "rgb_array" if args.video else None
+    render_mode, note = backends.render_mode(args.render, bool(args.video))
+    if note:
+        print(note)
     env = gym.make("mazeslam/Maze-v0", max_episode_steps=args.steps, render_mode=render_mode)
     if args.video:
         env = gym.wrappers.RecordVideo(env, args.video, name_prefix="random_agent", disable_logger=True)
     env.action_space.seed(args.seed)
     observation, info = env.reset(seed=args.seed)
     total, collisions, steps_taken = 0.0, 0, 0
-    for _ in range(args.steps):
+    for _ in tqdm(range(args.steps), desc="steps", unit="step", leave=False):
         observation, reward, terminated, truncated, info = env.step(env.action_space.sample())
         steps_taken += 1
         total += reward

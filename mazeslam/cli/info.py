@@ -7,7 +7,7 @@ from pathlib import Path
 
 import click
 
-from mazeslam.cli.options import FINITE
+from mazeslam.cli.options import FINITE, course_log_expected
 from mazeslam.data import log
 
 
@@ -29,7 +29,8 @@ from mazeslam.data import log
 @click.option("--mount-x", type=FINITE, help="With --detect-beams: sensor ahead of the wheel axle [m].")
 def info(log_file, lenient, detect_beams, config_path, mount_x):
     """Validate a course log and print a summary: records, duration, beams, odometry travel."""
-    course_log = log.read(log_file, strict=not lenient)
+    with course_log_expected(log_file):
+        course_log = log.read(log_file, strict=not lenient)
     facts = log.summary(course_log)
     click.echo(f"{facts['source']}: valid course log")
     click.echo(

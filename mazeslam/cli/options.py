@@ -10,13 +10,15 @@ machine has (``mazeslam.core.limits``), saying so. Click names the option in the
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
+from pathlib import Path
 from typing import TYPE_CHECKING
 
 import click
 
 from mazeslam.core import limits
-from mazeslam.core.config import MAX_FLOAT
+from mazeslam.core.config import MAX_FLOAT, InputError
 
 if TYPE_CHECKING:
     from mazeslam.core.beams import SensorOverrides
@@ -121,3 +123,35 @@ def geometry_overrides(first_beam_angle, beam_direction, mount_x) -> SensorOverr
         )
     except ValueError as error:
         raise click.BadParameter(str(error), param_hint="--first-beam-angle/--mount-x") from error
+
+
+@contextmanager
+def course_log_expected(path: Path) -> Iterator[None]:
+    """Meanwhile a file that is not a course log but a dataset's own log is refused in words that say
+    how to import it (``mazeslam import carmen``), instead of the first line that is not a number."""
+    from mazeslam.data import log
+
+    try:
+        yield
+    except log.LogFormatError as error:
+        if not _is_carmen(path):
+            raise
+        raise InputError(
+            f"{path}: not a course log (a CARMEN log? run `mazeslam import carmen {path} --out "
+            f"runs/{_stem(path)}.log`, then give that log)"
+        ) from error
+
+
+def _is_carmen(path: Path) -> bool:
+    """``path`` reads as a CARMEN log (``mazeslam.data.carmen.is_carmen``); False when it cannot be read."""
+    from mazeslam.data.carmen import is_carmen
+
+    try:
+        return is_carmen(path)
+    except (OSError, ValueError, EOFError):
+        return False
+
+
+def _stem(path: Path) -> str:
+    """``aces-corrected.log.gz`` -> ``aces-corrected``: the name without its suffixes."""
+    return path.name.split(".")[0]

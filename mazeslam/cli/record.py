@@ -58,7 +58,9 @@ from mazeslam.sim.simulator import SimulationConfig
     "--script",
     "script",
     type=click.Path(exists=True, dir_okay=False, path_type=Path),
-    help="Drive from 'duration speed turn_rate' lines instead of the keyboard.",
+    help="Drive from 'duration speed turn_rate' lines instead of the keyboard: seconds, forward speed in m/s, "
+    "turn rate in rad/s (counter-clockwise positive), '#' comments; e.g. '4.0 0.05 0.0' drives 4 s ahead at "
+    "5 cm/s, '1.5 0 1.0' turns 1.5 rad in place.",
 )
 @click.option("--duration", type=DURATION, help="Stop after this many seconds.")
 @beam_geometry_options

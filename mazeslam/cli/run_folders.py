@@ -13,9 +13,11 @@ default folder's run of another log (``check_same_log``); ``--out`` says where i
 from __future__ import annotations
 
 import json
+from collections.abc import Iterator
+from contextlib import contextmanager
 from pathlib import Path
 
-from mazeslam.core.outputs import OutputError
+from mazeslam.core.outputs import OutputError, prepare_output_folder
 from mazeslam.core.outputs import clear_outputs as clear_outputs  # importable from here, where it was
 
 #: The files ``mazeslam slam`` writes (glob patterns, in its output folder).
@@ -57,3 +59,21 @@ def check_same_log(folder: str | Path, log_file: str | Path, command: str) -> No
         f"{folder} holds the {command} run of another log named {Path(log_file).name} ({source}); "
         f"give --out for {log_file}, or remove {folder}"
     )
+
+
+@contextmanager
+def output_folder(path: str | Path) -> Iterator[Path]:
+    """The folder ``path``, created and probed (``prepare_output_folder``) for the block; when the
+    block fails, the folders it created and left empty are removed again (a first run that fails
+    leaves no empty ``runs/<log name>/slam/`` behind)."""
+    path = Path(path)
+    created = [folder for folder in (path, *path.parents) if not folder.exists()]  # deepest first
+    prepare_output_folder(path)
+    try:
+        yield path
+    except BaseException:
+        for folder in created:
+            if not folder.is_dir() or any(folder.iterdir()):
+                break
+            folder.rmdir()
+        raise

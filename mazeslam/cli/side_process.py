@@ -39,6 +39,10 @@ class RemoteTraceback(Exception):
     """The traceback of an error raised in the side process (the cause of the error raised here)."""
 
 
+#: How long a side process told to stop (SIGTERM) gets before it is killed, s.
+STOP_SECONDS = 2.0
+
+
 class SideProcess:
     """One forked process that imports ``modules`` at once, then runs the calls given to ``start``,
     one at a time. Use as a context manager (the process ends on leaving it)."""
@@ -123,7 +127,12 @@ class SideProcess:
         if self._process is not None:
             if self._process.is_alive():
                 self._process.terminate()
-            self._process.join()
+            # A SIGTERM that lands while it imports its modules can be swallowed by an import's own
+            # `except Exception`; then it waits for a call that never comes: SIGKILL ends it.
+            self._process.join(timeout=STOP_SECONDS)
+            if self._process.is_alive():
+                self._process.kill()
+                self._process.join()
             self._process = None
         if self._sender is not None:  # its write ends with the process
             self._sender.join()

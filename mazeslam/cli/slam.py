@@ -9,12 +9,19 @@ from typing import TYPE_CHECKING
 
 import click
 
-from mazeslam.cli.options import PARTICLES, SEED, beam_geometry_options, geometry_overrides
-from mazeslam.cli.run_folders import SLAM_FILES, check_same_log, default_out_dir
+from mazeslam.cli.options import (
+    PARTICLES,
+    POSITIVE,
+    SEED,
+    beam_geometry_options,
+    course_log_expected,
+    geometry_overrides,
+)
+from mazeslam.cli.run_folders import SLAM_FILES, check_same_log, default_out_dir, output_folder
 from mazeslam.cli.side_process import SideProcess
 from mazeslam.core.beams import SensorOverrides
 from mazeslam.core.config import with_settings
-from mazeslam.core.outputs import prepare_output_folder, staged_outputs
+from mazeslam.core.outputs import staged_outputs
 from mazeslam.data.beam_detection import convention_given, convention_warning, with_detected_convention
 from mazeslam.data.loaded_run import LoadedRun, load_run
 from mazeslam.evaluation.consistency import EXPLANATION, MOTION_EXPLANATION, POSE_BOUND_95, summarise
@@ -22,6 +29,7 @@ from mazeslam.evaluation.scoring import RPE_DISTANCE, score_run
 from mazeslam.evaluation.sharpness import paths_sharpness, sharpness_lines
 from mazeslam.gridslam.filter import SearchMode
 from mazeslam.pipeline import MapKind, SlamConfig, SlamResult, load_slam_config, run_slam
+from mazeslam.pipeline.log_kinds import chosen_config
 from mazeslam.pipeline.outputs import consistency
 from mazeslam.smoothing.optimum import optimum_columns, optimum_line
 from mazeslam.viz.run_files import figure_title, landmark_figure_call, trusted_span, write_run
@@ -54,7 +62,9 @@ FIGURE_MODULES = (
     "config_path",
     type=click.Path(exists=True, dir_okay=False, path_type=Path),
     help="Slam TOML: [map] kind and the filter's settings, [fastslam] or [grid], with [corners], [sensor], "
-    "[odometry], [scan_matching] (configs/fastslam.toml, configs/course.toml, configs/carmen.toml).",
+    "[odometry], [scan_matching] [default: the file under configs/ that fits the log's kind, named in one line: "
+    "course.toml for the exercise's robot, carmen.toml and mrclam.toml for imports, the defaults "
+    "(fastslam.toml) for simulated mazes].",
 )
 @click.option(
     "--out",
@@ -88,7 +98,15 @@ FIGURE_MODULES = (
     "--live",
     is_flag=True,
     help="Show the filter as it runs in a window (particles, map, current scan and corners; the grid "
-    "filter's map, path and particles); without a display, says so (use --animate).",
+    "filter's map, path and particles) at the log's own pace (--speed), space to pause and resume; the "
+    "window stays open at the end until closed. Without a display, says so (use --animate).",
+)
+@click.option(
+    "--speed",
+    type=POSITIVE,
+    default=1.0,
+    show_default=True,
+    help="With --live: log seconds shown per second (1: the log's own pace, 10: ten times faster).",
 )
 @beam_geometry_options
 @click.option("--quiet", is_flag=True, help="No progress bar.")
@@ -103,6 +121,7 @@ def slam(
     map_kind,
     animate,
     live,
+    speed,
     first_beam_angle,
     beam_direction,
     mount_x,
@@ -113,28 +132,30 @@ def slam(
     The filter is the one the config's [map] kind names: corner FastSLAM or the grid filter."""
     overrides = geometry_overrides(first_beam_angle, beam_direction, mount_x)
     given = out_dir is not None
-    out_dir = prepare_output_folder(out_dir or default_out_dir(log_file, "slam"))
-    if not given:  # a/run.log and b/run.log both default to runs/run/slam
-        check_same_log(out_dir, log_file, "slam")
     filter_changes = {
         "NPARTICLES": particles,
         "seed": seed,
         "association": association,
         "version": int(version) if version else None,
     }
-    lines = run_slam_command(
-        log_file,
-        config_path,
-        out_dir,
-        filter_changes,
-        overrides,
-        animate,
-        not quiet,
-        live=live,
-        echo=lambda message: click.echo(message, err=True),
-        map_kind=map_kind,
-        side_process=True,
-    )
+    with course_log_expected(log_file), output_folder(out_dir or default_out_dir(log_file, "slam")) as out_dir:
+        if not given:  # a/run.log and b/run.log both default to runs/run/slam
+            check_same_log(out_dir, log_file, "slam")
+        lines = run_slam_command(
+            log_file,
+            config_path,
+            out_dir,
+            filter_changes,
+            overrides,
+            animate,
+            not quiet,
+            live=live,
+            speed=speed,
+            echo=lambda message: click.echo(message, err=True),
+            map_kind=map_kind,
+            side_process=True,
+            say=click.echo,
+        )
     click.echo("\n".join(lines))
     click.echo(f"results in {out_dir}")
 
@@ -151,18 +172,23 @@ def run_slam_command(
     echo=None,
     map_kind: str | None = None,
     side_process: bool = False,
+    say=None,
+    speed: float = 1.0,
 ) -> list[str]:
     """Run, write ``out_dir``/{trajectory.csv, best_trajectory.csv, map.json, slam.png, occupancy.pgm/.yaml/.png,
     landmarks.csv[, slam.gif]}, replacing the last run's files (``SLAM_FILES``) once all are written
     (``staged_outputs``: an error or interrupt leaves them as they were); return the lines to print.
     ``filter_changes`` replace ``[fastslam]`` settings and ``sensor`` the ``[sensor]`` ones (None
-    values: keep the config's). ``live``: draw the filter as it runs (``mazeslam.viz.live``; its
-    note when there is no window goes to ``echo`` at once, and to the lines).
+    values: keep the config's). ``live``: draw the filter as it runs (``mazeslam.viz.live``) at
+    ``speed`` times the log's pace; its notes (no window; the window waiting to be closed) go to
+    ``echo`` at once, and to the lines.
     ``map_kind`` replaces ``[map] kind``; the particle count and seed go to the filter that runs.
     ``side_process``: corner FastSLAM's ``slam.png`` and map export are made by a ``SideProcess``
     forked before the filter runs, which loads matplotlib meanwhile and draws while this process
-    scores the run and writes the rest (the command line's way; otherwise they are made here)."""
-    config = load_slam_config(config_path)
+    scores the run and writes the rest (the command line's way; otherwise they are made here).
+    Without ``config_path``, the config that fits the log's kind runs (``chosen_config``); the line
+    saying which goes to ``say`` at once when given, else to the lines."""
+    config, chosen = _settings(log_file, config_path, say)
     filter_changes = filter_changes or {}
     changes = {"map.kind": map_kind, **{f"fastslam.{name}": value for name, value in filter_changes.items()}}
     changes.update({"grid.particles": filter_changes.get("NPARTICLES"), "grid.seed": filter_changes.get("seed")})
@@ -170,7 +196,7 @@ def run_slam_command(
     config = config.with_sensor(sensor)
     run = load_run(log_file, config.sensor)
     run = with_detected_convention(run, config, cache_folder=Path(out_dir))
-    notes = [note for note in [_given_convention_warning(run, config), _blind_motion_note(run, config)] if note]
+    notes = [note for note in [chosen, _given_convention_warning(run, config), _blind_motion_note(run, config)] if note]
     grid = config.map.kind == MapKind.GRID
     unused = [f"--{name}" for name in ("association", "version") if filter_changes.get(name) is not None]
     if grid and unused:
@@ -182,30 +208,59 @@ def run_slam_command(
         staged_outputs(out_dir, SLAM_FILES) as staging,
         SideProcess(FIGURE_MODULES, fork=side_process and not grid) as side,
     ):
-        lines, paths = _run_and_write(log_file, run, config, staging, notes, animate, progress, live, echo, side)
+        live_speed = speed if live else None
+        lines, paths = _run_and_write(log_file, run, config, staging, notes, animate, progress, live_speed, echo, side)
     return [*lines, "wrote " + ", ".join(str(Path(out_dir) / path.name) for path in paths.values())]
 
 
+def _settings(log_file, config_path, say) -> tuple[SlamConfig, str | None]:
+    """The settings of a run: the config file given, else the one that fits the log's kind
+    (``chosen_config``) with the line that says which, sent to ``say`` at once when there is one
+    (then None comes back), else returned to go with the run's lines."""
+    if config_path is not None:
+        return load_slam_config(config_path), None
+    choice = chosen_config(log_file)
+    if say is not None:
+        say(choice.line)
+        return choice.config, None
+    return choice.config, choice.line
+
+
 def _run_and_write(
-    log_file, run: LoadedRun, config: SlamConfig, out_dir: Path, notes: list[str], animate, progress, live, echo, side
+    log_file,
+    run: LoadedRun,
+    config: SlamConfig,
+    out_dir: Path,
+    notes: list[str],
+    animate,
+    progress,
+    live_speed: float | None,
+    echo,
+    side,
 ) -> tuple[list[str], dict[str, Path]]:
     """``run_slam_command`` once the settings and the log are read: the filter, its outputs written
     into ``out_dir`` (the staging folder) and the lines to print, with the paths written by name;
-    ``side`` (a ``SideProcess``) draws corner FastSLAM's figure and exports its map."""
+    ``side`` (a ``SideProcess``) draws corner FastSLAM's figure and exports its map; ``live_speed``:
+    the live view's speed (None: no live view)."""
     grid = config.map.kind == MapKind.GRID
     title = figure_title(run, config)
     updates = int(run.log.is_scan.sum() + (0 if grid else run.log.is_landmark.sum()))
     every = max(1, updates // ANIMATION_FRAMES) if animate else 0  # at most ~ANIMATION_FRAMES frames
     view: LiveView | GridLiveView | None = None
-    if live:
+    if live_speed is not None:
         from mazeslam.viz.live import GridLiveView, LiveView
 
-        view = GridLiveView(run, title) if grid else LiveView(run, config.corners, title)
+        if grid:
+            view = GridLiveView(run, title, speed=live_speed)
+        else:
+            view = LiveView(run, config.corners, title, speed=live_speed)
         if view.message and echo is not None:
             echo(view.message)
     began = time.perf_counter()
     result = run_slam(run, config, progress, snapshot_every=every, on_update=view)
     if view is not None:
+        if view.open and echo is not None:
+            echo("--live: the run is done; close the window (or press q) to write its outputs")
         view.close(len(run.log) - 1, result.filter)
     matching_seconds = time.perf_counter() - began - result.step_seconds.sum()
     lines = _run_lines(run, config, result, matching_seconds, notes)
@@ -276,7 +331,7 @@ def _run_lines(
     lines = [
         f"{run.path}: {len(course_log)} records, {int(course_log.is_scan.sum())} scans, "
         f"{result.updates} observation updates; "
-        f"beam geometry from {run.geometry_origin}",
+        f"beam geometry: {run.geometry_origin}",
         f"{result.filter_name}: {config.particles} particles, {result.resamplings} resamplings, {holds}, "
         f"{seconds:.2f} s" + speed,
     ]

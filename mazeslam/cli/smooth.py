@@ -26,11 +26,11 @@ import click
 import numpy as np
 
 from mazeslam.cli.options import beam_geometry_options, geometry_overrides
-from mazeslam.cli.run_folders import SMOOTH_FILES, check_same_log, default_out_dir
+from mazeslam.cli.run_folders import SMOOTH_FILES, check_same_log, default_out_dir, output_folder
 from mazeslam.core.beams import SensorOverrides
 from mazeslam.core.config import jsonable
 from mazeslam.core.motion import dead_reckoning
-from mazeslam.core.outputs import prepare_output_folder, staged_outputs, write_file
+from mazeslam.core.outputs import staged_outputs, write_file
 from mazeslam.data import sidecars
 from mazeslam.data.beam_detection import with_detected_convention
 from mazeslam.data.loaded_run import LoadedRun, load_run
@@ -79,11 +79,12 @@ def smooth(log_file, config_path, association, run_dir, out_dir, first_beam_angl
     out_dir = out_dir or default_out_dir(log_file, "smooth")
     if run_dir is not None and out_dir.resolve() == run_dir.resolve():
         raise click.UsageError("--out is RUN_DIR: the smoother would replace the run it reads; give another folder")
-    out_dir = prepare_output_folder(out_dir)
-    if not given:  # a/run.log and b/run.log both default to runs/run/smooth
-        check_same_log(out_dir, log_file, "smooth")
     overrides = geometry_overrides(first_beam_angle, beam_direction, mount_x)
-    click.echo("\n".join(run_smooth_command(log_file, config_path, out_dir, association, run_dir, overrides)))
+    with output_folder(out_dir) as out_dir:
+        if not given:  # a/run.log and b/run.log both default to runs/run/smooth
+            check_same_log(out_dir, log_file, "smooth")
+        lines = run_smooth_command(log_file, config_path, out_dir, association, run_dir, overrides)
+    click.echo("\n".join(lines))
     click.echo(f"results in {out_dir}")
 
 
@@ -113,7 +114,7 @@ def run_smooth_command(
     lines = [
         (
             f"{run.path}: {len(result.poses)} scan poses, {len(result.landmarks)} landmarks, "
-            f"association {how}; beam geometry from {run.geometry_origin}"
+            f"association {how}; beam geometry: {run.geometry_origin}"
         ),
         (
             f"Batch optimum: {result.iterations} iterations "

@@ -1,23 +1,22 @@
-"""Pictures of the Gymnasium environment, drawn off-screen with matplotlib (no display needed)."""
+"""Pictures of the Gymnasium environment, drawn off-screen with matplotlib on an Agg canvas of their
+own: no display needed, and pyplot's backend (a window's, a notebook's) is left alone."""
 
 from __future__ import annotations
 
-import matplotlib
+import numpy as np
+from matplotlib.backends.backend_agg import FigureCanvasAgg
+from matplotlib.figure import Figure
+from matplotlib.patches import Circle, Rectangle
 
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
-from matplotlib.backends.backend_agg import FigureCanvasAgg  # noqa: E402
-from matplotlib.patches import Circle, Rectangle  # noqa: E402
-
-from mazeslam.core.geometry import transform_points  # noqa: E402
+from mazeslam.core.geometry import transform_points
 
 
 def draw_maze_env(env, slam: dict | None = None, size_pixels: int = 480) -> np.ndarray:
     """An RGB image (H, W, 3) of ``env`` (a ``MazeEnv``): visited cells shaded, walls (seen ones
     dark), the robot, its laser rays (from the sensor to each return); with ``slam``
     (``{"particles": (P, 3), "landmarks": (L, 2)}``) the filter too."""
-    fig = plt.figure(figsize=(size_pixels / 100, size_pixels / 100), dpi=100)
+    fig = Figure(figsize=(size_pixels / 100, size_pixels / 100), dpi=100)
+    canvas = FigureCanvasAgg(fig)  # not pyplot's: no window, whatever its backend
     ax = fig.add_axes((0, 0, 1, 1))
     maze, s = env.maze, env.maze.cell_size
     for row, col in np.argwhere(env.visited):
@@ -48,9 +47,5 @@ def draw_maze_env(env, slam: dict | None = None, size_pixels: int = 480) -> np.n
     ax.set_ylim(-margin, maze.rows * s + margin)
     ax.set_aspect("equal")
     ax.axis("off")
-    canvas = fig.canvas
-    assert isinstance(canvas, FigureCanvasAgg), "drawn off-screen with the Agg backend (matplotlib.use above)"
     canvas.draw()
-    image = np.asarray(canvas.buffer_rgba())[..., :3].copy()
-    plt.close(fig)
-    return image
+    return np.asarray(canvas.buffer_rgba())[..., :3].copy()

@@ -2,13 +2,21 @@
 
 from __future__ import annotations
 
+import sys
+import warnings
+from collections.abc import Iterator
+from contextlib import contextmanager
 from pathlib import Path
+
+import numpy as np
 
 from mazeslam.data.beam_detection import with_detected_convention
 from mazeslam.data.loaded_run import LoadedRun, load_run
+from mazeslam.fastslam.filter import settings_hint
 from mazeslam.pipeline.config import MapKind, SlamConfig, load_slam_config
 from mazeslam.pipeline.fastslam_run import fastslam_on_run
 from mazeslam.pipeline.grid_run import grid_on_run
+from mazeslam.pipeline.log_kinds import SETTINGS, chosen_config, log_kind
 from mazeslam.pipeline.result import SlamResult
 from mazeslam.registration.scan_matching import LaserOdometry
 
@@ -41,16 +49,57 @@ def run_slam(
             f"run_slam takes a LoadedRun (load_run(path)), got {type(run).__name__}; for a log file: slam_on_file(path)"
         )
     config = as_config(config)
+    with numbers_checked(run, config):
+        if config.map.kind == MapKind.GRID:
+            return grid_on_run(run, config, progress, snapshot_every, on_update)
+        return fastslam_on_run(run, config, progress, snapshot_every, laser, on_update)
+
+
+class NumericalFailure(ValueError):
+    """The filter's arithmetic failed (numpy: a singular matrix, eigenvalues that did not converge,
+    a division by zero or an overflow): the settings do not fit the log. A ``ValueError``, so the
+    command line prints it as one line."""
+
+
+@contextmanager
+def numbers_checked(run: LoadedRun, config: SlamConfig) -> Iterator[None]:
+    """Meanwhile numpy's RuntimeWarnings (division by zero, overflow, invalid values) are errors,
+    and they and numpy's linear-algebra errors leave as a ``NumericalFailure`` that says what they
+    mean for the run and which settings to look at, never as a warning or a bare "Singular matrix"."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", RuntimeWarning)
+        try:
+            yield
+        except (np.linalg.LinAlgError, FloatingPointError, RuntimeWarning) as error:
+            raise NumericalFailure(_failure_message(run, config, error)) from error
+
+
+def _failure_message(run: LoadedRun, config: SlamConfig, error: Exception) -> str:
+    """One line for a numerical failure of the filter ``config`` names on ``run``: what happened,
+    numpy's words, the settings to check and the config that fits the log's kind."""
     if config.map.kind == MapKind.GRID:
-        return grid_on_run(run, config, progress, snapshot_every, on_update)
-    return fastslam_on_run(run, config, progress, snapshot_every, laser, on_update)
+        check = "check [grid] motion_noise and [grid.match] against this log"
+    else:
+        check = settings_hint(config.fastslam)
+    fits = SETTINGS[log_kind(run)]
+    fitting = f"; {run.path.name} is {log_kind(run).value}: --config configs/{fits} fits it" if fits else ""
+    return (
+        f"{run.path}: the {config.map.kind.filter_name} diverged (numpy: {str(error) or type(error).__name__}: "
+        f"a covariance or a weight went bad, the settings do not fit this log); {check}{fitting}"
+    )
 
 
 def slam_on_file(path: str | Path, config: SlamConfig | str | Path | None = None, progress: bool = True) -> SlamResult:
     """``run_slam`` on a log file, as ``mazeslam slam`` runs it: its sidecars read beside it,
     ``[sensor]`` applied, and the beam convention detected from its scans when neither says it
     (``with_detected_convention``). ``config``: a ``SlamConfig``, the path of its TOML file, or
-    None (the defaults)."""
+    None: the config under configs/ that fits the log's kind (``log_kinds.chosen_config``; with
+    ``progress``, its one line is printed to stderr, as the progress bar is)."""
+    if config is None:
+        choice = chosen_config(path)
+        if progress:
+            print(choice.line, file=sys.stderr)
+        config = choice.config
     config = as_config(config)
     return run_slam(with_detected_convention(load_run(path, config.sensor), config), config, progress)
 

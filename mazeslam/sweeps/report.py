@@ -6,15 +6,13 @@ import json
 import math
 from pathlib import Path
 
-import matplotlib
+import numpy as np
+import pandas as pd
 
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
-import pandas as pd  # noqa: E402
-
-from mazeslam.sweeps.runner import MAPS, summarise  # noqa: E402
-from mazeslam.viz.plots import draw_walls  # noqa: E402
+from mazeslam.core.config import InputError
+from mazeslam.sweeps.runner import MAPS, summarise
+from mazeslam.viz.backends import file_figure
+from mazeslam.viz.plots import draw_walls
 
 #: The summary's columns: (metric, header). Metrics an older table lacks are left out.
 REPORTED = [
@@ -131,6 +129,12 @@ def setting_text(key: str, value, values: list | None = None) -> str:
 def make_report(out_dir: str | Path) -> list[Path]:
     """Write summary.md, one plot per grid setting and the maps side by side; return the files."""
     out_dir = Path(out_dir)
+    missing = [name for name in ("sweep.json", "results.csv") if not (out_dir / name).is_file()]
+    if missing:
+        raise InputError(
+            f"{out_dir}: not a sweep's results folder (no {' or '.join(missing)}); "
+            f"`mazeslam sweep configs/sweeps/smoke.toml --out {out_dir}` makes one"
+        )
     meta = json.loads((out_dir / "sweep.json").read_text())
     table = in_millimetres(pd.read_csv(out_dir / "results.csv"))
     keys = list(meta["grid"])
@@ -183,9 +187,8 @@ def _plot_against(table: pd.DataFrame, key: str, others: list[str], out_dir: Pat
     summary = summarise(table, [key] + others, [spec[0] for spec in plotted] + ["reckoning_ate_rmse"])
     columns = 4
     rows = math.ceil(len(plotted) / columns)
-    fig, grid = plt.subplots(
-        rows, columns, figsize=(4.3 * columns, 3.6 * rows + 1.2), squeeze=False, layout="constrained"
-    )
+    fig = file_figure(figsize=(4.3 * columns, 3.6 * rows + 1.2), layout="constrained")
+    grid = fig.subplots(rows, columns, squeeze=False)
     axes = list(grid.flat)
     for ax in axes[len(plotted) :]:
         ax.axis("off")
@@ -283,7 +286,6 @@ def _plot_against(table: pd.DataFrame, key: str, others: list[str], out_dir: Pat
     fig.legend(handles, labels, loc="outside lower center", ncol=min(len(labels), 5), fontsize=8)
     path = out_dir / f"plot_{short_name(key)}.png"
     fig.savefig(path, dpi=100)
-    plt.close(fig)
     return path
 
 
@@ -297,13 +299,8 @@ def _maps_side_by_side(
         return None
     columns = min(len(files), 4)
     rows = math.ceil(len(files) / columns)
-    fig, axes = plt.subplots(
-        rows,
-        columns,
-        figsize=(3.6 * columns, 3.6 * rows + 0.9),
-        squeeze=False,
-        layout="constrained",
-    )
+    fig = file_figure(figsize=(3.6 * columns, 3.6 * rows + 0.9), layout="constrained")
+    axes = fig.subplots(rows, columns, squeeze=False)
     for ax, file, (_, row) in zip(axes.flat, files, first.iterrows()):
         drawing = json.loads(file.read_text())
         draw_walls(ax, np.asarray(drawing["walls"], float), linewidth=0.8)
@@ -337,5 +334,4 @@ def _maps_side_by_side(
     )
     path = out_dir / "maps.png"
     fig.savefig(path, dpi=110)
-    plt.close(fig)
     return path

@@ -11,14 +11,12 @@ from __future__ import annotations
 from pathlib import Path
 
 import matplotlib
+import numpy as np
+from matplotlib.collections import LineCollection
 
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
-from matplotlib.collections import LineCollection  # noqa: E402
-
-from mazeslam.features.corners import ScanFeatures  # noqa: E402
-from mazeslam.viz.plots import save_figure  # noqa: E402
+from mazeslam.features.corners import ScanFeatures
+from mazeslam.viz.backends import file_figure
+from mazeslam.viz.plots import save_figure
 
 KIND_STYLE = {
     "corner": dict(marker="o", color="tab:green", label="corner"),
@@ -28,7 +26,7 @@ KIND_STYLE = {
     "edge": dict(marker="x", color="tab:purple", label="end at the field of view"),
     "junction": dict(marker="+", color="tab:brown", label="junction"),
 }
-LINE_COLOURS = plt.get_cmap("tab10")
+LINE_COLOURS = matplotlib.colormaps["tab10"]
 
 
 class ScanView:
@@ -120,6 +118,7 @@ def plot_scan(
     path: str | Path, features: ScanFeatures, mount=(0.0, 0.0), title: str = "", true_corners: np.ndarray | None = None
 ) -> Path:
     """Save the figure of one scan (robot frame) to ``path``."""
-    fig, ax = plt.subplots(figsize=(7.5, 7.5))
+    fig = file_figure(figsize=(7.5, 7.5))
+    ax = fig.subplots()
     draw_scan(ax, features, mount, true_corners)
     return save_figure(fig, ax, path, title)

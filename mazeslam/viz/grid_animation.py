@@ -28,12 +28,15 @@ class GridView:
         low, high: (2,) the corners of the area shown, m.
         title: the figure's title, to which ``show`` adds the scan.
         truth_label: the legend's name of the true path ("reference path" for a log's own poses).
+        figure: the figure to draw on (a window's, pyplot's); default: one for a file (``file_figure``).
     """
 
-    def __init__(self, low: np.ndarray, high: np.ndarray, title: str, truth_label: str = "true path"):
-        import matplotlib.pyplot as plt
+    def __init__(self, low: np.ndarray, high: np.ndarray, title: str, truth_label: str = "true path", figure=None):
+        from mazeslam.viz.backends import file_figure
 
-        self.figure, self.ax = plt.subplots(figsize=(8.5, 6.5), layout="constrained")
+        self.figure = figure if figure is not None else file_figure(figsize=(8.5, 6.5))
+        self.figure.set_layout_engine("constrained")
+        self.ax = self.figure.subplots()
         ax, self.title = self.ax, title
         self.image = ax.imshow(
             np.zeros((1, 1)), cmap="gray", vmin=0, vmax=255, interpolation="nearest", extent=(0, 1, 0, 1)

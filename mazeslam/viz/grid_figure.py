@@ -8,6 +8,22 @@ import numpy as np
 
 from mazeslam.data.map_io import OccupancyMap, to_image
 
+#: About how many pixels the map's longer side gets in the figure (9 in at 120 dpi, less the margins).
+MAX_PIXELS = 800
+
+
+def darkest_of_blocks(image: np.ndarray, max_pixels: int) -> np.ndarray:
+    """``image`` (H, W) grey levels shrunk by whole blocks until its longer side is at most
+    ``max_pixels``, each block its darkest cell: an occupied cell (black) survives at building scale,
+    where drawing every cell would leave most of them out between two pixels."""
+    factor = max(1, -(-max(image.shape) // max_pixels))
+    if factor == 1:
+        return image
+    rows, columns = (-(-side // factor) * factor for side in image.shape)
+    padded = np.full((rows, columns), image.max(), dtype=image.dtype)
+    padded[: image.shape[0], : image.shape[1]] = image
+    return padded.reshape(rows // factor, factor, columns // factor, factor).min(axis=(1, 3))
+
 
 def plot_grid_run(
     path: str | Path,
@@ -22,16 +38,17 @@ def plot_grid_run(
     """Draw the map ``occupancy`` (grey unknown, white free, black occupied; world frame, metres)
     with the mean path ``mean`` (R, 3), the best particle's path ``best`` (R, 3), the final
     ``particles`` (P, 3) and, when given, ``truth`` (R, 3); save to ``path``."""
-    import matplotlib.pyplot as plt
-
+    from mazeslam.viz.backends import file_figure
     from mazeslam.viz.plots import save_figure
 
-    fig, ax = plt.subplots(figsize=(9, 7))
+    fig = file_figure(figsize=(9, 7))
+    ax = fig.subplots()
     if occupancy.states.size:
         rows, columns = occupancy.states.shape
         x0, y0 = occupancy.origin[:2]
         extent = (x0, x0 + rows * occupancy.resolution, y0, y0 + columns * occupancy.resolution)
-        ax.imshow(to_image(occupancy.states), cmap="gray", vmin=0, vmax=255, extent=extent, interpolation="nearest")
+        image = darkest_of_blocks(to_image(occupancy.states), MAX_PIXELS)
+        ax.imshow(image, cmap="gray", vmin=0, vmax=255, extent=extent, interpolation="nearest")
         ax.plot([], [], "s", color="black", label="occupied cells (best particle's map)")
     if truth is not None:
         ax.plot(truth[:, 0], truth[:, 1], color="tab:green", lw=1.2, label=truth_label)

@@ -1,10 +1,11 @@
 """``mazeslam slam --live`` and ``mazeslam corners --live``: windows updated as the log is processed.
 
 The window is ``SlamView`` (map of the best particle with 2-sigma ellipses, particles, the current
-scan and its corners, the estimated path, truth and walls when the log has them). It is redrawn
+scan and its corners, the estimated path, truth and walls when the log has them). In a window the
+log plays at its own pace (``Pacing``; ``speed`` times it with ``mazeslam slam --speed``), the space
+bar pauses and resumes, and the last frame stays open until the window is closed. It is redrawn
 after an observation update at most ``max_fps`` times a second, and never sooner than the last
-redraw took, so drawing takes at most about half of the wall-clock time: the filter runs at least
-half as fast as without the window.
+redraw took.
 
 ``GridLiveView`` is the same for the grid filter (``[map] kind = "grid"``): the best particle's map,
 the mean path, the particles and the truth when the log has one (``GridView``), redrawn after a
@@ -13,8 +14,8 @@ scan as often as ``LiveView``.
 ``CornersLiveView`` is the same for ``mazeslam corners``: the current scan in the robot frame, its
 extracted lines and corners, and the robot (a triangle along its heading, +x), redrawn as scans are
 extracted, at most ``max_fps`` times a second. In a window every scan is shown (extraction waits for
-the window: it is far faster than anyone can watch); off-screen, scans in between are skipped and a
-frame is never drawn sooner than the last one took.
+the window: it is far faster than anyone can watch) and the last scan stays open until the window is
+closed; off-screen, scans in between are skipped and a frame is never drawn sooner than the last one took.
 
 A window needs a display and an interactive matplotlib backend (Qt, Tk, GTK, macOS). Without one
 (``MPLBACKEND=Agg``, a server without ``DISPLAY``) the view draws into an off-screen figure and
@@ -23,61 +24,82 @@ A window needs a display and an interactive matplotlib backend (Qt, Tk, GTK, mac
 
 from __future__ import annotations
 
-import os
-import sys
 import time
+from collections.abc import Callable
 from typing import Any
 
-import matplotlib
 import numpy as np
 
 from mazeslam.core.geometry import transform_points
+from mazeslam.viz.backends import window_backend
 from mazeslam.viz.slam_view import SlamView, view_extent
 
-#: Backends tried for a window, in order, when ``MPLBACKEND`` does not name one.
-WINDOW_BACKENDS = ("QtAgg", "TkAgg", "GTK4Agg", "GTK3Agg", "macosx")
-NON_INTERACTIVE = {"agg", "pdf", "ps", "svg", "pgf", "cairo", "template"}
+#: The key that pauses and resumes a live window.
+PAUSE_KEY = " "
+#: How often a paused or finished window is looked at, s.
+IDLE_SECONDS = 0.1
+#: What a playing window's title adds.
+PLAYING = "space: pause / resume"
+#: What a finished window's title adds.
+FINISHED = "finished: close the window (or press q) to go on"
 
 
-def choose_backend() -> tuple[bool, str]:
-    """Switch matplotlib to a window backend if there is a display; returns (whether a window
-    can open, the backend in use). ``MPLBACKEND`` is obeyed when set."""
-    import matplotlib.pyplot as plt
+class Pacing:
+    """Plays a log at ``speed`` times its own pace: how long to wait before showing a record so
+    that the log's time since the first record shown, divided by ``speed``, has passed on the
+    ``clock`` since it was shown. Waits nothing where the filter is slower than that.
 
-    wanted = os.environ.get("MPLBACKEND")
-    has_display = sys.platform in ("darwin", "win32") or bool(
-        os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY")
-    )
-    candidates = [wanted] if wanted else (WINDOW_BACKENDS if has_display else ())
-    for backend in candidates:
-        try:
-            plt.switch_backend(backend)
-        except (ImportError, RuntimeError, ValueError):
-            continue
-        return matplotlib.get_backend().lower() not in NON_INTERACTIVE, matplotlib.get_backend()
-    plt.switch_backend("Agg")
-    return False, "agg"
+    Args:
+        times: (R,) the log's record times, s.
+        speed: how many log seconds a wall-clock second shows (1: the log's own pace).
+        clock: the wall clock, s (``time.perf_counter``).
+    """
+
+    def __init__(self, times: np.ndarray, speed: float = 1.0, clock: Callable[[], float] = time.perf_counter):
+        if not speed > 0:
+            raise ValueError(f"the live view's speed must be positive, got {speed}")
+        self.times, self.speed, self.clock = np.asarray(times, dtype=float), float(speed), clock
+        self._started: float | None = None
+        self._first = 0.0
+
+    def wait(self, index: int) -> float:
+        """Seconds to wait before showing record ``index`` (0 when it is due or late)."""
+        now = self.clock()
+        if self._started is None:
+            self._started, self._first = now, float(self.times[index])
+        due = self._started + (self.times[index] - self._first) / self.speed
+        return max(0.0, due - now)
+
+    def hold(self, seconds: float) -> None:
+        """Time spent paused does not count against the log's pace."""
+        if self._started is not None:
+            self._started += seconds
 
 
 class FilterView:
     """What both filters' live views share: a window (or an off-screen figure, ``message`` saying
-    so), the mean pose after each update (``path``), redrawing at most ``max_fps`` times a second
-    and never sooner than the last redraw took, and the final frame on ``close``. A subclass makes
-    ``self.view`` (with a ``figure``) and ``draw(index, slam)``.
+    so), the mean pose after each update (``path``), and the final frame on ``close``. A subclass
+    makes ``self.view`` (with a ``figure``) and ``draw(index, slam)``.
+
+    In a window the log plays at ``speed`` times its own pace (``Pacing``), the space bar pauses and
+    resumes it, closing the window lets the filter finish without it, and ``close`` keeps the last
+    frame open until the window is closed. Frames are drawn at most ``max_fps`` times a second and
+    never sooner than the last one took (off-screen too, where nothing waits for the log's pace).
 
     Attributes:
         frames: how many frames were drawn.
         window: whether they went to a window on screen.
         message: what to tell the user when there is no window (None when there is).
         path: the filter's mean pose (3,) after each update.
+        paused: the window's pause key was pressed (and not again).
     """
 
     view: Any
 
-    def __init__(self, max_fps: float):
+    def __init__(self, times: np.ndarray, max_fps: float, speed: float = 1.0):
         import matplotlib.pyplot as plt
 
-        self.window, backend = choose_backend()
+        self.window, backend = window_backend()
         self.message = (
             None
             if self.window
@@ -85,10 +107,30 @@ class FilterView:
         )
         if self.window:
             plt.ion()
+        self.pacing = Pacing(times, speed)
         self.max_fps = max_fps
         self.path: list[np.ndarray] = []
         self.frames, self.drawing_seconds = 0, 0.0
+        self.paused = False
         self._last, self._last_cost = -np.inf, 0.0
+
+    def watch_keys(self) -> None:
+        """Listen to the window's pause key (a subclass calls it once ``self.view`` exists)."""
+        if self.window:
+            self.view.figure.canvas.mpl_connect("key_press_event", self.on_key)
+            self.view.figure.suptitle(PLAYING, fontsize=9, color="0.4")
+
+    def on_key(self, event) -> None:
+        """The pause key toggles ``paused``."""
+        if event.key == PAUSE_KEY:
+            self.paused = not self.paused
+
+    @property
+    def open(self) -> bool:
+        """The window is still on screen (False off-screen)."""
+        import matplotlib.pyplot as plt
+
+        return self.window and plt.fignum_exists(self.view.figure.number)
 
     def mean_pose(self, slam) -> np.ndarray:
         """The filter's weighted-mean pose (3,)."""
@@ -96,6 +138,10 @@ class FilterView:
 
     def __call__(self, index: int, slam) -> None:
         self.path.append(self.mean_pose(slam))
+        if self.window:
+            if not self.open:
+                return  # closed by the user: the filter goes on without it
+            self._keep_pace(index)
         now = time.perf_counter()
         if now - self._last < max(1.0 / self.max_fps, self._last_cost):
             return
@@ -103,6 +149,17 @@ class FilterView:
         self._last = time.perf_counter()
         self._last_cost = self._last - now
         self.drawing_seconds += self._last_cost
+
+    def _keep_pace(self, index: int) -> None:
+        """Wait (the window responsive meanwhile) while paused and until record ``index`` is due."""
+        import matplotlib.pyplot as plt
+
+        while self.paused and self.open:
+            plt.pause(IDLE_SECONDS)
+            self.pacing.hold(IDLE_SECONDS)
+        wait = self.pacing.wait(index)
+        if wait > 0 and self.open:
+            plt.pause(wait)
 
     def draw(self, index: int, slam) -> None:
         """Draw one frame of the filter's state after record ``index``."""
@@ -118,26 +175,40 @@ class FilterView:
             self.view.figure.canvas.draw()
         self.frames += 1
 
-    def close(self, index: int | None = None, slam=None) -> None:
-        """Draw the final state (when given), then close the window and return to drawing files."""
+    def close(self, index: int | None = None, slam=None, keep_open: bool = True) -> None:
+        """Draw the final state (when given); a window then stays open until the user closes it
+        (``keep_open``), and is closed."""
         import matplotlib.pyplot as plt
 
-        if slam is not None and index is not None:
+        if slam is not None and index is not None and (self.open or not self.window):
             self.draw(index, slam)
-            if self.window:
-                plt.pause(1.0)
+        if keep_open:
+            wait_until_closed(self.view.figure, self.window)
         plt.close(self.view.figure)
-        plt.switch_backend("Agg")
+
+
+def wait_until_closed(figure, window: bool) -> None:
+    """Keep ``figure``'s window on screen, its title saying it is finished, until the user closes it
+    (nothing off-screen, or when it is closed already)."""
+    import matplotlib.pyplot as plt
+
+    if not window or not plt.fignum_exists(figure.number):
+        return
+    figure.suptitle(FINISHED, fontsize=9, color="tab:red")
+    while plt.fignum_exists(figure.number):
+        plt.pause(IDLE_SECONDS)
 
 
 class LiveView(FilterView):
     """``on_update`` for ``run_slam`` with corner FastSLAM: its particles, the best particle's map,
     the current scan and its corners, in a window (or off-screen; ``FilterView``)."""
 
-    def __init__(self, run, corner_params, title: str = "", max_fps: float = 5.0):
+    def __init__(self, run, corner_params, title: str = "", max_fps: float = 5.0, speed: float = 1.0):
+        import matplotlib.pyplot as plt
+
         from mazeslam.features.corners import CornerExtractor
 
-        super().__init__(max_fps)
+        super().__init__(run.log.times, max_fps, speed)
         self.run = run
         self.extractor = CornerExtractor(run.geometry, run.log.width, corner_params) if run.log.n_beams else None
         self.mount = np.array([run.geometry.mount_x, run.geometry.mount_y])
@@ -147,7 +218,9 @@ class LiveView(FilterView):
             run.walls.reshape(-1, 2) if run.walls is not None and len(run.walls) else None,
             margin=0.3,
         )
-        self.view = SlamView(run.log.times, np.zeros((0, 3)), extent, title, run.truth, run.walls)
+        figure = plt.figure(figsize=(8.5, 6))
+        self.view = SlamView(run.log.times, np.zeros((0, 3)), extent, title, run.truth, run.walls, figure=figure)
+        self.watch_keys()
         self.view.scan_at = self._scan
 
     def _scan(self, index: int) -> tuple[np.ndarray, np.ndarray]:
@@ -174,16 +247,20 @@ class GridLiveView(FilterView):
     the particles and the truth when the log has one (``GridView``), in a window (or off-screen;
     ``FilterView``)."""
 
-    def __init__(self, run, title: str = "", max_fps: float = 5.0):
+    def __init__(self, run, title: str = "", max_fps: float = 5.0, speed: float = 1.0):
+        import matplotlib.pyplot as plt
+
         from mazeslam.viz.grid_animation import GridView
 
-        super().__init__(max_fps)
+        super().__init__(run.log.times, max_fps, speed)
         self.run, self.scans = run, int(run.log.is_scan.sum())
         start = np.asarray(run.start_pose, dtype=float)[:2]
         self.low, self.high = start.copy(), start.copy()
         if run.truth is not None:
             self.low, self.high = run.truth[:, :2].min(axis=0), run.truth[:, :2].max(axis=0)
-        self.view = GridView(self.low, self.high, title, run.truth_path_label)
+        figure = plt.figure(figsize=(8.5, 6.5))
+        self.view = GridView(self.low, self.high, title, run.truth_path_label, figure=figure)
+        self.watch_keys()
 
     def mean_pose(self, slam) -> np.ndarray:
         return slam.cloud(np.zeros(3))[1]
@@ -220,7 +297,7 @@ class CornersLiveView:
 
         from mazeslam.viz.corner_plots import ScanView
 
-        self.window, backend = choose_backend()
+        self.window, backend = window_backend()
         self.message = (
             None
             if self.window
@@ -273,13 +350,13 @@ class CornersLiveView:
             self.figure.canvas.draw()
         self.frames += 1
 
-    def close(self, report=None) -> None:
-        """Draw the last scan (when given), then close the window and return to drawing files."""
+    def close(self, report=None, keep_open: bool = True) -> None:
+        """Draw the last scan (when given); a window then stays open until the user closes it
+        (``keep_open``), and is closed."""
         import matplotlib.pyplot as plt
 
         if report is not None and report.features:
             self.draw(report, len(report.features) - 1)
-            if self.window:
-                plt.pause(1.0)
+        if keep_open:
+            wait_until_closed(self.figure, self.window)
         plt.close(self.figure)
-        plt.switch_backend("Agg")

@@ -8,16 +8,13 @@ each, not one artist per item, so a figure of thousands of scan points draws in 
 
 from __future__ import annotations
 
-import sys
 from pathlib import Path
 
-import matplotlib
+import numpy as np
+from matplotlib.collections import EllipseCollection, LineCollection
 
-matplotlib.use("Agg")  # draw to files; no display needed (pyplot itself loads only where a figure is made with it)
-import numpy as np  # noqa: E402
-from matplotlib.collections import EllipseCollection, LineCollection  # noqa: E402
-
-from mazeslam.core.outputs import written  # noqa: E402
+from mazeslam.core.outputs import written
+from mazeslam.viz.backends import close_figure, file_figure
 
 
 def plot_run(
@@ -36,9 +33,8 @@ def plot_run(
         truth: (R, 3) true poses.
         estimates: name -> (R, 3) estimated poses, e.g. ``{"dead reckoning": ...}``.
     """
-    import matplotlib.pyplot as plt
-
-    fig, ax = plt.subplots(figsize=(8, 7.5))
+    fig = file_figure(figsize=(8, 7.5))
+    ax = fig.subplots()
     draw_walls(ax, walls, colour="0.25", linewidth=1.5)
     if len(corners):
         ax.plot(corners[:, 0], corners[:, 1], "o", color="tab:green", markersize=4, label="true corners")
@@ -96,8 +92,7 @@ def draw_ellipses(
 def save_figure(fig, ax, path: str | Path, title: str = "", legend_columns: int = 4, dpi: int = 120) -> Path:
     """Title ``ax``, put its legend below the plot, lay ``fig`` out (constrained layout, so neither
     the legend nor an axis label is cut off), save it to ``path`` (folders made; whole or not at
-    all, ``mazeslam.core.outputs.written``) and close it, saved or not (a pyplot figure; one made as
-    ``matplotlib.figure.Figure`` is not pyplot's to close)."""
+    all, ``mazeslam.core.outputs.written``) and close it, saved or not (``close_figure``)."""
     ax.set_title(title)
     fig.set_layout_engine("constrained")
     handles, labels = ax.get_legend_handles_labels()
@@ -109,7 +104,5 @@ def save_figure(fig, ax, path: str | Path, title: str = "", legend_columns: int 
         with written(path) as temporary:
             fig.savefig(temporary, dpi=dpi)
     finally:
-        pyplot = sys.modules.get("matplotlib.pyplot")
-        if pyplot is not None:
-            pyplot.close(fig)
+        close_figure(fig)
     return path

@@ -72,10 +72,12 @@ def draw_slam_figure(path, figure: SlamFigure) -> Path:
 
     fig = Figure(figsize=(9, 7))
     ax = fig.add_subplot()
-    plots.draw_walls(ax, figure.walls)
     points = figure.points
     if len(points):  # one rasterised artist: thousands of points cost one image, not thousands of marks
-        ax.plot(*points.T, ".", color="black", markersize=0.8, alpha=0.4, label="scan points", rasterized=True)
+        ax.plot(
+            *points.T, ".", color="black", markersize=0.6, alpha=0.15, label="scan points", rasterized=True, zorder=1
+        )
+    plots.draw_walls(ax, figure.walls, colour="tab:brown", linewidth=1.2)  # over the points: they do not hide it
     truth, true_landmarks = figure.truth, figure.true_landmarks
     if truth is not None:
         ax.plot(truth[:, 0], truth[:, 1], color="tab:green", linewidth=1.2, label=figure.truth_label)
@@ -91,6 +93,8 @@ def draw_slam_figure(path, figure: SlamFigure) -> Path:
         )
     mean = figure.mean_poses
     ax.plot(mean[:, 0], mean[:, 1], color="tab:blue", linewidth=1.2, label="FastSLAM path")
+    ax.plot(*mean[0, :2], "o", color="tab:blue", markerfacecolor="white", markersize=8, label="start", zorder=5)
+    ax.plot(*mean[-1, :2], "s", color="tab:blue", markersize=7, label="end", zorder=5)
     ax.plot(figure.particles[:, 0], figure.particles[:, 1], ".", color="red", markersize=3, label="particles")
     landmarks = figure.landmarks
     plots.draw_ellipses(ax, landmarks, figure.landmark_covariances)

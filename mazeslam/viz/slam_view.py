@@ -13,13 +13,14 @@ import shutil
 from collections.abc import Callable
 from pathlib import Path
 
-import matplotlib.pyplot as plt
+import matplotlib
 import numpy as np
 from matplotlib.collections import EllipseCollection, LineCollection
 from matplotlib.patches import Ellipse
 
 from mazeslam.core.geometry import transform_points
 from mazeslam.core.outputs import written
+from mazeslam.viz.backends import close_figure, file_figure
 from mazeslam.viz.plots import draw_ellipses
 
 #: ``scan_at(record index) -> (scan points (K, 2), corners (C, 2))`` in the world frame.
@@ -42,7 +43,7 @@ class SlamView:
         truth_label: str = "true path",
     ):
         self.times, self.mean_poses, self.truth, self.scan_at, self.title = times, mean_poses, truth, scan_at, title
-        self.figure = figure if figure is not None else plt.figure(figsize=(8.5, 6))
+        self.figure = figure if figure is not None else file_figure(figsize=(8.5, 6))
         self.figure.clf()
         ax = self.ax = self.figure.add_subplot(111)
         if walls is not None and len(walls):
@@ -167,7 +168,7 @@ def save_animation(
     writer: FFMpegWriter | PillowWriter
     ffmpeg = ffmpeg_path() if video is not False else None
     if ffmpeg is not None:
-        plt.rcParams["animation.ffmpeg_path"] = ffmpeg
+        matplotlib.rcParams["animation.ffmpeg_path"] = ffmpeg
         path = path.with_suffix(".mp4")
         writer = FFMpegWriter(fps=frames_per_second, codec="libx264", extra_args=["-pix_fmt", "yuv420p"])
     else:
@@ -187,5 +188,5 @@ def save_animation(
         raise
     finally:
         bar.close()
-    plt.close(view.figure)
+    close_figure(view.figure)
     return path

@@ -14,11 +14,11 @@ from mazeslam.smoothing.optimum import Smoothed
 def plot_smoothed(path, run: LoadedRun, smoothed: Smoothed, points: np.ndarray) -> Path:
     """The slam figure for the optimum: its map with 2-sigma ellipses, scan points placed by its poses,
     its path beside dead reckoning; with the sidecars, the walls, true path and true corners."""
-    import matplotlib.pyplot as plt  # here: the slam command imports this module, and draws without pyplot
-
+    from mazeslam.viz.backends import file_figure
     from mazeslam.viz.plots import draw_ellipses, save_figure
 
-    fig, ax = plt.subplots(figsize=(9, 7))
+    fig = file_figure(figsize=(9, 7))
+    ax = fig.subplots()
     for x1, y1, x2, y2 in run.walls if run.walls is not None else []:
         ax.plot([x1, x2], [y1, y2], color="0.6", linewidth=1.0)
     if len(points):

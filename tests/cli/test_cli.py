@@ -156,7 +156,7 @@ def test_info_detects_the_beam_convention_slam_uses_it_and_warns_about_a_wrong_o
     assert "direction +1" in best and abs(float(best.split("beam 0 at")[1].split("deg")[0])) <= 5
     corner_fastslam = ["--config", config, "--map", "landmarks", "--quiet"]  # faster than the config's grid filter
     result = invoke("slam", course_log_path, *corner_fastslam, "--out", tmp_path / "s")
-    assert "beam geometry from detected from the scans: beam 0 at 0 deg, direction +1" in result.output
+    assert "beam geometry: detected from the scans: beam 0 at 0 deg, direction +1" in result.output
     assert (tmp_path / "s" / "beam_convention.json").exists()  # the next run reads it
     assert "warning" not in result.output
     assert "left out 5 odometry records" in result.output

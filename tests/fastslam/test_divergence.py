@@ -14,7 +14,7 @@ from conftest import PROJECT_ROOT, SHARED_DATA
 from mazeslam.data import log
 from mazeslam.fastslam import ekf
 from mazeslam.fastslam.filter import FastSLAM, FastSLAMParams, FilterDivergence
-from mazeslam.pipeline import load_slam_config, slam_on_file
+from mazeslam.pipeline import SlamConfig, load_slam_config, slam_on_file
 from mazeslam.pipeline.fastslam_run import run_fastslam
 
 #: Landmarks (x, y, metres) around a robot driving an arc from the origin.
@@ -122,8 +122,9 @@ def test_slam_on_file_takes_the_path_of_a_config(landmarks, tmp_path):
 
 
 def test_an_imported_mrclam_log_without_its_config(tmp_path):
-    """The issue's reproducer on the real data: `mazeslam import mrclam ... --robot 1`, then `mazeslam
-    slam` without `--config configs/mrclam.toml` (which runs it)."""
+    """The issue's reproducer on the real data: `mazeslam import mrclam ... --robot 1`, then FastSLAM
+    on the defaults instead of configs/mrclam.toml (without a config, `mazeslam slam` and
+    `slam_on_file` run that one: tests/pipeline/test_log_kinds.py)."""
     dataset = SHARED_DATA / "mrclam" / "MRCLAM_Dataset6"
     if not dataset.exists():
         pytest.skip(f"MRCLAM data not found at {dataset} (the shared data folder is absent)")
@@ -132,7 +133,7 @@ def test_an_imported_mrclam_log_without_its_config(tmp_path):
     out = tmp_path / "mrclam1.log"
     import_mrclam(dataset, 1, out)
     with pytest.raises(ValueError) as error:
-        slam_on_file(out, progress=False)
+        slam_on_file(out, SlamConfig(), progress=False)
     assert str(error.value).startswith(f"{out}:77 (t 1248444189.599 s): this log's 1534 landmark observations")
     assert "--config configs/mrclam.toml" in str(error.value)
     config = load_slam_config(PROJECT_ROOT / "configs" / "mrclam.toml")

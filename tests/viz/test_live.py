@@ -3,6 +3,7 @@ says there is no window."""
 
 import time
 
+import numpy as np
 import pytest
 from click.testing import CliRunner
 
@@ -124,11 +125,108 @@ def test_corners_live_in_a_window_shows_every_scan_at_the_frame_rate(short_log, 
 
     waits: list[float] = []
     monkeypatch.setenv("MPLBACKEND", "Agg")
-    monkeypatch.setattr(live, "choose_backend", lambda: (True, "agg"))
+    monkeypatch.setattr(live, "window_backend", lambda: (True, "agg"))
     monkeypatch.setattr(plt, "pause", lambda seconds: waits.append(seconds))
     view = live.CornersLiveView(load_scans(short_log), max_fps=50.0)
     assert view.window and view.message is None
     report = CornerReport.from_log(short_log, progress=False, on_scan=view)
     assert view.frames == len(report.features)
     assert waits and max(waits) <= 1 / 50.0 + 1e-9
-    view.close(report)
+    view.close(report, keep_open=False)
+
+
+class FakeWindow:
+    """Stands in for a window's time: ``pause`` advances a clock instead of waiting, and after
+    ``closed_after`` idle pauses at the end the user "closes" the window."""
+
+    def __init__(self):
+        self.now, self.waits = 0.0, []
+
+    def clock(self) -> float:
+        return self.now
+
+    def pause(self, seconds: float) -> None:
+        self.waits.append(seconds)
+        self.now += seconds
+
+
+def window_view(monkeypatch, short_log, speed: float):
+    """A ``LiveView`` that believes it has a window, on the fake clock of a ``FakeWindow``."""
+    import matplotlib.pyplot as plt
+
+    from mazeslam.viz import live
+
+    fake = FakeWindow()
+    monkeypatch.setenv("MPLBACKEND", "Agg")
+    monkeypatch.setattr(live, "window_backend", lambda: (True, "agg"))
+    monkeypatch.setattr(plt, "pause", fake.pause)
+    view = live.LiveView(load_run(short_log), SlamConfig().corners, "short.log", max_fps=1e9, speed=speed)
+    view.pacing.clock = fake.clock
+    return view, fake
+
+
+@pytest.mark.parametrize("speed", [1.0, 4.0])
+def test_a_window_plays_the_log_at_its_own_pace_times_the_speed(short_log, monkeypatch, speed):
+    """Issue 35: the filter runs far faster than the log's clock; in a window each update waits until
+    its record is due, so the last update is shown (log duration / speed) after the first."""
+    view, fake = window_view(monkeypatch, short_log, speed)
+    run = load_run(short_log)
+    run_slam(run, progress=False, on_update=view)
+    updates = np.flatnonzero(run.log.is_scan)  # corner FastSLAM updates at each scan
+    expected = (run.log.times[updates[-1]] - run.log.times[updates[0]]) / speed
+    assert fake.now == pytest.approx(expected, abs=0.01)  # the frames' own pauses (1 ms each) add a little
+    view.close(keep_open=False)
+
+
+def test_the_pause_key_holds_the_log_and_a_finished_window_stays_open_until_closed(short_log, monkeypatch):
+    import matplotlib.pyplot as plt
+
+    from mazeslam.viz import live
+
+    view, fake = window_view(monkeypatch, short_log, 1.0)
+    key = type("Key", (), {"key": live.PAUSE_KEY})()
+    view.on_key(key)
+    assert view.paused
+    pauses_while_paused = []
+
+    def pause(seconds):  # the user resumes after five idle pauses
+        fake.pause(seconds)
+        if view.paused:
+            pauses_while_paused.append(seconds)
+            if len(pauses_while_paused) == 5:
+                view.on_key(key)
+
+    monkeypatch.setattr(plt, "pause", pause)
+    run = load_run(short_log)
+    result = run_slam(run, progress=False, on_update=view)
+    assert pauses_while_paused == [live.IDLE_SECONDS] * 5 and not view.paused
+    # The time held paused does not count against the pace: the log still plays from where it was.
+    scans = run.log.times[run.log.is_scan]
+    assert fake.now == pytest.approx(scans[-1] - scans[0] + 5 * live.IDLE_SECONDS, abs=0.01)
+
+    idle = []
+
+    def closed_by_user(seconds):  # the finished window waits until the user closes it (the third idle pause)
+        idle.append(seconds)
+        if len(idle) == 3:
+            plt.close(view.view.figure)
+
+    monkeypatch.setattr(plt, "pause", closed_by_user)
+    view.close(len(run.log) - 1, result.filter)
+    assert len(idle) == 3 and not plt.fignum_exists(view.view.figure.number)
+    assert view.view.figure.get_suptitle() == live.FINISHED
+
+
+def test_pacing_waits_for_each_record_and_never_for_a_late_one():
+    from mazeslam.viz.live import Pacing
+
+    clock = FakeWindow()
+    pacing = Pacing(np.array([9.0, 10.0, 11.0, 13.0, 14.0]), speed=2.0, clock=clock.clock)
+    assert pacing.wait(1) == 0.0  # the first record shown sets the clock
+    assert pacing.wait(2) == 0.5  # one log second at twice its pace
+    clock.now = 0.5
+    assert pacing.wait(3) == 1.0
+    clock.now = 5.0  # the filter fell behind: no waiting
+    assert pacing.wait(4) == 0.0
+    with pytest.raises(ValueError, match="speed must be positive"):
+        Pacing(np.zeros(2), speed=0.0)
