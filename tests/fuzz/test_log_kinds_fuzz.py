@@ -65,19 +65,13 @@ def test_every_log_kind_config_map_and_association_maps_or_is_refused(
 NUMBERS_THAT_ARE_NOT = re.compile(r"(?<![\w.])-?(nan|inf)(?![\w])", re.IGNORECASE)
 
 
-#: ``mazeslam slam`` prints the nearest two landmarks' distance as "nan m apart" for a map of one
-#: landmark: the course log's map has one (configs/course.toml, chosen for it by default or given).
-ONE_LANDMARK = pytest.mark.xfail(
-    strict=True,
-    reason="mazeslam/cli/slam.py _run_lines prints 'the nearest two nan m apart' for a one-landmark map: "
-    "mazeslam/pipeline/outputs.py consistency() gives nearest_landmarks_m = NaN below two landmarks",
-)
+#: Every kind, with its own config or the one chosen for it, both map kinds. (The course log's map
+#: with configs/course.toml has one landmark: the line of the nearest two was "nan m apart".)
 CLI_CASES = [
     pytest.param(
         kind,
         own_config,
         map_kind,
-        marks=[ONE_LANDMARK] if (kind, map_kind) == ("course", "landmarks") else [],
         id=f"{kind}-{'own-config' if own_config else 'defaults'}-{map_kind}",
     )
     for kind in LOG_KINDS
