@@ -4,7 +4,7 @@ The grid is built from the log's scans placed along an estimated path (the filte
 every beam marks the cells it crosses free and the cell it ends in occupied, in log-odds, as an
 occupancy-grid mapper with known poses does. Returns beyond ``max_range`` (untrusted) only clear the
 cells up to ``max_range``; no return (0) marks nothing. The cell states are written by
-``mazeslam.data.map_io.write_map`` (``occupancy.pgm``, ``occupancy.yaml``, ``occupancy.png``),
+``mazeslam.data.map_io.write_map`` (``occupancy.pgm``, ``occupancy.yaml``),
 the reader and writer the grid filter uses too.
 """
 
@@ -113,22 +113,15 @@ def write_landmarks(path: str | Path, landmarks: np.ndarray, covariances: np.nda
 
 
 def export_map(
-    out_dir: str | Path,
-    course_log: log.CourseLog,
-    poses: np.ndarray,
-    geometry: BeamGeometry,
-    landmarks: np.ndarray,
-    covariances: np.ndarray,
-    min_range: float = 0.0,
-    max_range: float = math.inf,
+    out_dir: str | Path, occupancy: OccupancyMap | None, landmarks: np.ndarray, covariances: np.ndarray
 ) -> dict[str, Path]:
-    """Write ``occupancy.pgm``/``.yaml``/``.png`` (when the log has scans) and ``landmarks.csv``
-    into ``out_dir``; returns their paths by name."""
+    """Write ``occupancy.pgm``/``.yaml`` (when there is an ``occupancy``: ``occupancy_from_scans``)
+    and ``landmarks.csv`` (``landmarks`` (L, 2) m, ``covariances`` (L, 2, 2)) into ``out_dir``;
+    returns their paths by name."""
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
     paths = {"landmarks": write_landmarks(out_dir / "landmarks.csv", landmarks, covariances)}
-    if course_log.is_scan.any():
-        occupancy = occupancy_from_scans(course_log, poses, geometry, min_range, max_range)
+    if occupancy is not None:
         paths["occupancy"] = write_map(occupancy, out_dir, "occupancy")
         paths["occupancy_image"] = out_dir / "occupancy.pgm"
     return paths

@@ -17,11 +17,11 @@ from pathlib import Path
 import numpy as np
 import yaml
 
-from mazeslam.core.outputs import write_file, written
+from mazeslam.core.outputs import write_file
 
 #: Cell states, as nav_msgs/OccupancyGrid: unknown, free, occupied.
 UNKNOWN, FREE, OCCUPIED = -1, 0, 100
-_PIXEL = {OCCUPIED: 0, FREE: 254, UNKNOWN: 205}
+PIXEL = {OCCUPIED: 0, FREE: 254, UNKNOWN: 205}
 
 
 @dataclass
@@ -41,9 +41,9 @@ class OccupancyMap:
 
 def to_image(states: np.ndarray) -> np.ndarray:
     """The trinary PGM image (Y, X) uint8 of cell states (X, Y): row 0 is the largest y."""
-    image = np.full(states.shape, _PIXEL[UNKNOWN], dtype=np.uint8)
-    image[states == FREE] = _PIXEL[FREE]
-    image[states == OCCUPIED] = _PIXEL[OCCUPIED]
+    image = np.full(states.shape, PIXEL[UNKNOWN], dtype=np.uint8)
+    image[states == FREE] = PIXEL[FREE]
+    image[states == OCCUPIED] = PIXEL[OCCUPIED]
     return np.flipud(image.T)
 
 
@@ -54,17 +54,14 @@ def write_map(
     occupied_thresh: float = 0.65,
     free_thresh: float = 0.196,
 ) -> Path:
-    """Write ``name.pgm``, ``name.yaml`` and ``name.png`` into ``folder``, each whole or not at all
-    (``mazeslam.core.outputs.written``); returns the YAML's path."""
+    """Write ``name.pgm`` and ``name.yaml`` (map_server's pair) into ``folder``, each whole or not at
+    all (``mazeslam.core.outputs.written``); returns the YAML's path. The map as a figure with axes
+    in metres is ``mazeslam.viz.grid_figure.plot_occupancy``'s."""
     folder = Path(folder)
     folder.mkdir(parents=True, exist_ok=True)
     image = to_image(occupancy.states)
     height, width = image.shape
     write_file(folder / f"{name}.pgm", f"P5\n{width} {height}\n255\n".encode() + image.tobytes())
-    from matplotlib import image as images  # matplotlib writes the figures anyway; OpenCV is slow to load
-
-    with written(folder / f"{name}.png") as temporary:
-        images.imsave(temporary, image, cmap="gray", vmin=0, vmax=255)
     description = {
         "image": f"{name}.pgm",
         "resolution": float(occupancy.resolution),

@@ -4,8 +4,8 @@ Files in the run's folder (``write_outputs``): ``trajectory.csv`` (the cloud's w
 every record with its covariance) and ``trajectory.tum`` (the same for evo), ``best_trajectory.csv``
 (the best particle's path), ``map.json`` (run facts, the landmarks with covariances or the grid's
 summary, the errors with truth; strict JSON), ``truth.tum`` beside a truth; a grid run also
-``occupancy.pgm`` + ``occupancy.yaml`` (ROS map_server) and ``occupancy.png``. Figures and
-animations are drawn by ``mazeslam.viz``.
+``occupancy.pgm`` + ``occupancy.yaml`` (ROS map_server). Figures (``slam.png``, ``occupancy.png``)
+and animations are drawn by ``mazeslam.viz``.
 """
 
 from __future__ import annotations

@@ -112,13 +112,19 @@ def draw_and_export(
     """The outputs that need matplotlib, in one call (``mazeslam slam`` makes it in a side process):
     ``slam.png`` (``draw_slam_figure``) and the map export (``map_export.export_map``: occupancy
     grid along the figure's mean path, scan returns within [min_range, max_range] m, and the
-    figure's landmarks). Returns the paths by name, the figure's first."""
-    from mazeslam.data.map_export import export_map
+    figure's landmarks) with the grid's ``occupancy.png`` (``plot_occupancy``). Returns the paths by
+    name, the figure's first."""
+    from mazeslam.data.map_export import export_map, occupancy_from_scans
+    from mazeslam.viz.grid_figure import plot_occupancy
 
     out_dir = Path(out_dir)
     paths = {"figure": draw_slam_figure(out_dir / "slam.png", figure)}
-    mean, landmarks, covariances = figure.mean_poses, figure.landmarks, figure.landmark_covariances
-    paths.update(export_map(out_dir, course_log, mean, geometry, landmarks, covariances, min_range, max_range))
+    occupancy = None
+    if course_log.is_scan.any():
+        occupancy = occupancy_from_scans(course_log, figure.mean_poses, geometry, min_range, max_range)
+    paths.update(export_map(out_dir, occupancy, figure.landmarks, figure.landmark_covariances))
+    if occupancy is not None:
+        paths["occupancy_figure"] = plot_occupancy(out_dir / "occupancy.png", occupancy, figure.title)
     return paths
 
 

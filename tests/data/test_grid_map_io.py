@@ -16,7 +16,7 @@ def test_a_written_map_reads_back_the_same(tmp_path):
     assert description["resolution"] == 0.05 and description["origin"] == [-3.2, 1.6, 0.0]
     assert 0 < description["free_thresh"] < description["occupied_thresh"] < 1
     assert (tmp_path / "occupancy.pgm").read_bytes().startswith(b"P5\n37 23\n255\n")  # width (x), height (y)
-    assert (tmp_path / "occupancy.png").exists()
+    assert sorted(path.name for path in tmp_path.iterdir()) == ["occupancy.pgm", "occupancy.yaml"]  # map_server's pair
     back = read_map(path)
     np.testing.assert_array_equal(back.states, states)
     assert back.resolution == 0.05

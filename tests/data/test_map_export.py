@@ -47,7 +47,8 @@ def read_pgm(path) -> np.ndarray:
 
 def test_known_walls_are_occupied_and_the_path_free(short_run, tmp_path):
     run = short_run
-    paths = export_map(tmp_path, run.log, run.truth, run.geometry, np.zeros((0, 2)), np.zeros((0, 2, 2)))
+    occupancy = occupancy_from_scans(run.log, run.truth, run.geometry)
+    paths = export_map(tmp_path, occupancy, np.zeros((0, 2)), np.zeros((0, 2, 2)))
     description = yaml.safe_load(paths["occupancy"].read_text())
     assert set(description) >= {"image", "resolution", "origin", "negate", "occupied_thresh", "free_thresh"}
     assert description["image"] == "occupancy.pgm" and description["resolution"] == 0.01

@@ -1,8 +1,10 @@
-"""Issue 35: a building-scale grid map keeps its occupied cells in the figure."""
+"""A grid map in a figure: a building-scale map keeps its occupied cells; occupancy.png is a readable figure."""
 
+import matplotlib.image
 import numpy as np
 
-from mazeslam.viz.grid_figure import darkest_of_blocks
+from mazeslam.data.map_io import FREE, OCCUPIED, UNKNOWN, OccupancyMap
+from mazeslam.viz.grid_figure import darkest_of_blocks, plot_occupancy
 
 
 def test_an_occupied_cell_survives_the_shrinking_to_the_figures_pixels():
@@ -13,3 +15,14 @@ def test_an_occupied_cell_survives_the_shrinking_to_the_figures_pixels():
     assert shrunk.shape == (11, 800)  # blocks of 3 x 3 cells, the last row padded
     assert shrunk[10, 799] == 0 and shrunk[1, 1] == 205 and (shrunk == 0).sum() == 1
     np.testing.assert_array_equal(darkest_of_blocks(image[:, :800], 800), image[:, :800])  # small maps: as they are
+
+
+def test_occupancy_png_is_a_figure_of_the_map_at_a_readable_size(tmp_path):
+    states = np.full((68, 68), UNKNOWN, dtype=np.int8)  # a course map: 68 x 68 cells of 1 cm
+    states[10:60, 10:60] = FREE
+    states[10:60, 10] = OCCUPIED
+    path = plot_occupancy(tmp_path / "occupancy.png", OccupancyMap(states, 0.01, np.zeros(3)), "log1")
+    height, width, _ = matplotlib.image.imread(path).shape
+    assert min(height, width) >= 600  # not one pixel per cell
+    image = matplotlib.image.imread(path)[..., :3]
+    assert (image.max(axis=2) < 0.1).sum() > 1000  # the black wall (and the axes' text) drawn large
