@@ -381,7 +381,7 @@ class GridSlam:
         accepted = share >= match.min_overlap
         centre = mode if accepted else predicted
         log_eta, mean, covariance = field.kernels.proposal(
-            *field.kernel_args,
+            field.kernel_field,
             points,
             centre,
             predicted,

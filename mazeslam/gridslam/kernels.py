@@ -25,10 +25,11 @@ The kernels, in the order a scan uses them:
 4. ``proposal``: the stencil's scores (``objective``) around the match, and their moments.
 5. ``integrate``: a scan's free samples and hits added to a window (``integrate_scan``).
 
-The distance kernels share their first arguments, the window and its memo: ``values`` (X, Y)
-float32, ``threshold``, ``blocks`` (the blocks' occupancy, int8, -1 not known yet), ``memo``
-float32 and ``stamps`` int64 (each >= X * Y, ``lookup``), ``stamp``, ``origin`` (2,) m and
-``resolution`` m.
+The distance kernels take the window and its memo as one tuple, ``field``: ``(values, threshold,
+blocks, memo, stamps, stamp, origin, resolution)``, the log-odds (X, Y) float32 and the occupied
+threshold, the blocks' occupancy (int8, -1 not known yet), the memo's distances (float32) and
+stamps (int64, each >= X * Y, ``lookup``) and this window's stamp, the origin (2,) m and the
+resolution m (``mazeslam.gridslam.matching.LikelihoodField.kernel_field``).
 """
 
 from __future__ import annotations
@@ -140,7 +141,7 @@ def _search(values, threshold, blocks, i, j):
 
 
 @njit(cache=True)
-def lookup(values, threshold, blocks, memo, stamps, stamp, origin, resolution, world, distance, gradient):
+def lookup(field, world, distance, gradient):
     """The distance (m) at world points ``world`` (N, 2), bilinear between the four nearest cell
     centres, into ``distance`` (N,), and its gradient (m/m) into ``gradient`` (N, 2). A cell's
     distance is searched the first time it is read (``_search``) and kept in ``memo`` (>= X * Y,),
@@ -151,6 +152,7 @@ def lookup(values, threshold, blocks, memo, stamps, stamp, origin, resolution, w
     One function for the whole batch of points: numba passes arrays to a compiled call with a
     reference count, which costs more than a memoised read, so the per-point work stays in this loop.
     """
+    values, threshold, blocks, memo, stamps, stamp, origin, resolution = field
     size_y = values.shape[1]
     scale = np.float32(resolution)
     for k in range(world.shape[0]):
@@ -199,28 +201,12 @@ def _squared_norm(offset, information):
 
 
 @njit(cache=True)
-def refine(
-    values,
-    threshold,
-    blocks,
-    memo,
-    stamps,
-    stamp,
-    origin,
-    resolution,
-    points,
-    prior,
-    information,
-    schedule,
-    iterations,
-    scale,
-    floor,
-    start,
-):
+def refine(field, points, prior, information, settings, start):
     """The pose (3,) maximising the end points' likelihood times the Gaussian prior, by
     iteratively reweighted Gauss-Newton from ``start`` (3,): ``points`` (N, 2) robot frame,
-    ``prior`` (3,) and its ``information`` (3, 3), the stages' sigmas ``schedule`` (S,) m,
-    ``iterations`` per stage, the likelihood's ``scale`` and ``floor`` (``MatchParams``)."""
+    ``prior`` (3,) and its ``information`` (3, 3); ``settings`` = (the stages' sigmas (S,) m,
+    iterations per stage, the likelihood's scale and floor) (``MatchParams``)."""
+    schedule, iterations, scale, floor = settings
     count = points.shape[0]
     arms, world = np.empty((count, 2)), np.empty((count, 2))
     distance, gradient = np.empty(count), np.empty((count, 2))
@@ -230,7 +216,7 @@ def refine(
             place(np.array([0.0, 0.0, pose[2]]), points, arms)
             world[:, 0] = pose[0] + arms[:, 0]
             world[:, 1] = pose[1] + arms[:, 1]
-            lookup(values, threshold, blocks, memo, stamps, stamp, origin, resolution, world, distance, gradient)
+            lookup(field, world, distance, gradient)
             offset = pose - prior
             offset[2] = _wrap(offset[2])
             hessian = information.copy()
@@ -250,14 +236,7 @@ def refine(
 
 @njit(cache=True)
 def objective(
-    values,
-    threshold,
-    blocks,
-    memo,
-    stamps,
-    stamp,
-    origin,
-    resolution,
+    field,
     poses,
     points,
     prior,
@@ -273,7 +252,7 @@ def objective(
     scores = np.empty(poses.shape[0])
     for p in range(poses.shape[0]):
         place(poses[p], points, world)
-        lookup(values, threshold, blocks, memo, stamps, stamp, origin, resolution, world, distance, gradient)
+        lookup(field, world, distance, gradient)
         scores[p] = scale * _log_product(distance, sigma, floor) - 0.5 * _squared_norm(poses[p] - prior, information)
     return scores
 
@@ -297,67 +276,26 @@ def _log_product(distance, sigma, floor):
 
 
 @njit(cache=True)
-def overlap(values, threshold, blocks, memo, stamps, stamp, origin, resolution, pose, points, within):
+def overlap(field, pose, points, within):
     """Share of ``points`` (N, 2) robot frame that lie within ``within`` m of an occupied cell at ``pose`` (3,)."""
     count = points.shape[0]
     world, distance, gradient = np.empty((count, 2)), np.empty(count), np.empty((count, 2))
     place(pose, points, world)
-    lookup(values, threshold, blocks, memo, stamps, stamp, origin, resolution, world, distance, gradient)
+    lookup(field, world, distance, gradient)
     return np.sum(distance <= within) / max(count, 1)
 
 
 @njit(cache=True)
-def match(
-    values,
-    threshold,
-    blocks,
-    memo,
-    stamps,
-    stamp,
-    origin,
-    resolution,
-    points,
-    prior,
-    information,
-    schedule,
-    iterations,
-    scale,
-    floor,
-    within,
-):
+def match(field, points, prior, information, settings, within):
     """``refine`` from the prior, then ``overlap`` at the refined pose: the pose (3,) and the share
     of ``points`` (N, 2) within ``within`` m of an occupied cell there."""
-    pose = refine(
-        values,
-        threshold,
-        blocks,
-        memo,
-        stamps,
-        stamp,
-        origin,
-        resolution,
-        points,
-        prior,
-        information,
-        schedule,
-        iterations,
-        scale,
-        floor,
-        prior,
-    )
-    return pose, overlap(values, threshold, blocks, memo, stamps, stamp, origin, resolution, pose, points, within)
+    pose = refine(field, points, prior, information, settings, prior)
+    return pose, overlap(field, pose, points, within)
 
 
 @njit(cache=True)
 def proposal(
-    values,
-    threshold,
-    blocks,
-    memo,
-    stamps,
-    stamp,
-    origin,
-    resolution,
+    field,
     points,
     centre,
     prior,
@@ -372,14 +310,7 @@ def proposal(
     normaliser ``log eta = log sum_j tau_j``, and the ``tau``-weighted mean (3,) and covariance (3, 3)
     of the steps (plus 1e-10 on the diagonal)."""
     scores = objective(
-        values,
-        threshold,
-        blocks,
-        memo,
-        stamps,
-        stamp,
-        origin,
-        resolution,
+        field,
         centre + steps,
         points,
         prior,

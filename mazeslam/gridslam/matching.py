@@ -105,8 +105,8 @@ class LikelihoodField:
         self.memo = (memo or DistanceMemo()).claim(self.values.size)
 
     @property
-    def kernel_args(self) -> tuple:
-        """The arguments every distance kernel starts with (``mazeslam.gridslam.kernels``)."""
+    def kernel_field(self) -> tuple:
+        """The window and its memo as the distance kernels take them (``mazeslam.gridslam.kernels``)."""
         return self.values, self.threshold, self.blocks, *self.memo, self.origin, self.resolution
 
     def occupied_points(self) -> np.ndarray:
@@ -118,14 +118,14 @@ class LikelihoodField:
         Points outside the window take the nearest border cells."""
         flat = np.ascontiguousarray(points, dtype=float).reshape(-1, 2)
         value, gradient = np.empty(len(flat)), np.empty((len(flat), 2))
-        self.kernels.lookup(*self.kernel_args, flat, value, gradient)
+        self.kernels.lookup(self.kernel_field, flat, value, gradient)
         return value.reshape(points.shape[:-1]), gradient.reshape(points.shape)
 
     def log_likelihood(self, poses: np.ndarray, points: np.ndarray, params: MatchParams) -> np.ndarray:
         """``log p(z | m, x)`` (K,) of end points ``points`` (N, 2) (robot frame) at ``poses`` (K, 3)."""
         poses = np.ascontiguousarray(poses, dtype=float)
         return self.kernels.objective(
-            *self.kernel_args,
+            self.kernel_field,
             poses,
             _points(points),
             np.zeros(3),
@@ -152,7 +152,7 @@ class LikelihoodField:
     def overlap(self, pose: np.ndarray, points: np.ndarray, params: MatchParams) -> float:
         """Fraction of ``points`` (N, 2) (robot frame) within ``overlap_distance`` of an occupied cell."""
         pose = np.asarray(pose, dtype=float)
-        return float(self.kernels.overlap(*self.kernel_args, pose, _points(points), params.overlap_distance))
+        return float(self.kernels.overlap(self.kernel_field, pose, _points(points), params.overlap_distance))
 
 
 def _points(points: np.ndarray) -> np.ndarray:
@@ -183,17 +183,8 @@ def refine_pose(
     ``d_i`` weighted by ``rho'(d_i) / d_i`` of ``rho(d) = -log(exp(-d^2 / (2 s^2)) + floor)``: points
     near a wall weigh ``1 / s^2``, points far from all walls nothing (``kernels.refine``).
     """
-    return field.kernels.refine(
-        *field.kernel_args,
-        _points(points),
-        np.asarray(prior, dtype=float),
-        np.ascontiguousarray(prior_information, dtype=float),
-        np.asarray(params.sigma_schedule, dtype=float),
-        params.iterations,
-        params.scale,
-        params.floor,
-        np.array(prior if start is None else start, dtype=float),
-    )
+    start = np.array(prior if start is None else start, dtype=float)
+    return field.kernels.refine(field.kernel_field, *_prior(points, prior, prior_information), _settings(params), start)
 
 
 def match_pose(
@@ -201,15 +192,17 @@ def match_pose(
 ) -> tuple[np.ndarray, float]:
     """``refine_pose`` from ``prior`` and the ``overlap`` of the result: the pose (3,) and the
     share of ``points`` (N, 2) within ``overlap_distance`` of an occupied cell there."""
-    pose, share = field.kernels.match(
-        *field.kernel_args,
-        _points(points),
-        np.asarray(prior, dtype=float),
-        np.ascontiguousarray(prior_information, dtype=float),
-        np.asarray(params.sigma_schedule, dtype=float),
-        params.iterations,
-        params.scale,
-        params.floor,
-        params.overlap_distance,
-    )
+    arguments = (*_prior(points, prior, prior_information), _settings(params), params.overlap_distance)
+    pose, share = field.kernels.match(field.kernel_field, *arguments)
     return pose, float(share)
+
+
+def _prior(points: np.ndarray, prior: np.ndarray, information: np.ndarray) -> tuple:
+    """End points (N, 2), the prior's mean (3,) and information (3, 3) as the kernels take them."""
+    return _points(points), np.asarray(prior, dtype=float), np.ascontiguousarray(information, dtype=float)
+
+
+def _settings(params: MatchParams) -> tuple:
+    """The refinement's settings as ``kernels.refine`` takes them: (sigmas (S,) m, iterations,
+    scale, floor)."""
+    return np.asarray(params.sigma_schedule, dtype=float), params.iterations, params.scale, params.floor
