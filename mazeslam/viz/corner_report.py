@@ -81,10 +81,13 @@ class CornerReport:
         return convention_warning(run.log, self.scans.geometry, self.params.min_range, self.params.max_range)
 
     def title(self, index: int) -> str:
-        """What a figure of scan ``index`` shows."""
+        """What a figure of scan ``index`` shows; its time only when that tells it from the other scans
+        (a log whose stamps are rounded, as CSAIL's to 1.13486e+09 s, gives many scans one time)."""
+        times = np.asarray(self.scans.times)
+        when = f", t = {times[index]:.2f} s" if np.count_nonzero(times == times[index]) == 1 else ""
         return (
-            f"{Path(self.scans.source).name}: scan {index} (record {self.scans.records[index]}, "
-            f"t = {self.scans.times[index]:.2f} s)\nits lines and corners, in the robot frame"
+            f"{Path(self.scans.source).name}: scan {index} (record {self.scans.records[index]}{when})"
+            "\nits lines and corners, in the robot frame"
         )
 
     @property

@@ -73,9 +73,11 @@ def draw_slam_figure(path, figure: SlamFigure) -> Path:
     fig = Figure(figsize=(9, 7))
     ax = fig.add_subplot()
     points = figure.points
+    # faint under walls, which they must not hide; without walls (a real log) the points are the map
+    faint = 0.15 if figure.walls is not None and len(figure.walls) else 0.3
     if len(points):  # one rasterised artist: thousands of points cost one image, not thousands of marks
         ax.plot(
-            *points.T, ".", color="black", markersize=0.6, alpha=0.15, label="scan points", rasterized=True, zorder=1
+            *points.T, ".", color="black", markersize=0.6, alpha=faint, label="scan points", rasterized=True, zorder=1
         )
     plots.draw_walls(ax, figure.walls, colour="tab:brown", linewidth=1.2)  # over the points: they do not hide it
     truth, true_landmarks = figure.truth, figure.true_landmarks
@@ -94,8 +96,10 @@ def draw_slam_figure(path, figure: SlamFigure) -> Path:
     mean = figure.mean_poses
     ax.plot(mean[:, 0], mean[:, 1], color="tab:blue", linewidth=1.2, label="FastSLAM path")
     ax.plot(*mean[0, :2], "o", color="tab:blue", markerfacecolor="white", markersize=8, label="start", zorder=5)
-    ax.plot(*mean[-1, :2], "s", color="tab:blue", markersize=7, label="end", zorder=5)
-    ax.plot(figure.particles[:, 0], figure.particles[:, 1], ".", color="red", markersize=3, label="particles")
+    particles = figure.particles  # they gather where the path ends: the end is an outline drawn over them
+    ax.plot(particles[:, 0], particles[:, 1], ".", color="red", markersize=3, label="particles", zorder=5)
+    end = dict(markerfacecolor="none", markeredgewidth=2, markersize=9, zorder=6)
+    ax.plot(*mean[-1, :2], "s", color="tab:blue", label="end", **end)
     landmarks = figure.landmarks
     plots.draw_ellipses(ax, landmarks, figure.landmark_covariances)
     if len(landmarks):

@@ -12,17 +12,19 @@ from mazeslam.smoothing.optimum import Smoothed
 
 
 def plot_smoothed(path, run: LoadedRun, smoothed: Smoothed, points: np.ndarray) -> Path:
-    """The slam figure for the optimum: its map with 2-sigma ellipses, scan points placed by its poses,
-    its path beside dead reckoning; with the sidecars, the walls, true path and true corners."""
+    """The slam figure for the optimum: its map with 2-sigma ellipses, faint scan points placed by its
+    poses, its path (start and end marked) beside dead reckoning; with the sidecars, the walls (drawn
+    over the points), true path and true corners."""
     from mazeslam.viz.backends import file_figure
-    from mazeslam.viz.plots import draw_ellipses, save_figure
+    from mazeslam.viz.plots import draw_ellipses, draw_walls, save_figure
 
     fig = file_figure(figsize=(9, 7))
     ax = fig.subplots()
-    for x1, y1, x2, y2 in run.walls if run.walls is not None else []:
-        ax.plot([x1, x2], [y1, y2], color="0.6", linewidth=1.0)
-    if len(points):
-        ax.plot(*points.T, ".", color="black", markersize=0.8, alpha=0.4, label="scan points")
+    if len(points):  # faint and rasterised, as in slam.png (slam_figure.draw_slam_figure)
+        ax.plot(
+            *points.T, ".", color="black", markersize=0.6, alpha=0.15, label="scan points", rasterized=True, zorder=1
+        )
+    draw_walls(ax, run.walls, colour="tab:brown", linewidth=1.2)  # over the points: they do not hide it
     paths = {
         "dead reckoning": (dead_reckoning(run.log, run.start_pose), "0.5"),
         "batch optimum": (smoothed.poses, "tab:blue"),
@@ -31,6 +33,10 @@ def plot_smoothed(path, run: LoadedRun, smoothed: Smoothed, points: np.ndarray) 
         paths[run.truth_path_label] = (run.truth, "tab:green")
     for label, (poses, colour) in paths.items():
         ax.plot(poses[:, 0], poses[:, 1], color=colour, linewidth=1.2, label=label)
+    poses = smoothed.poses
+    ax.plot(*poses[0, :2], "o", color="tab:blue", markerfacecolor="white", markersize=8, label="start", zorder=5)
+    end = dict(markerfacecolor="none", markeredgewidth=2, markersize=9, zorder=6)  # as in slam.png
+    ax.plot(*poses[-1, :2], "s", color="tab:blue", label="end", **end)
     if len(run.true_corners):
         ax.plot(
             *run.true_corners.T, "o", color="tab:green", markersize=4, markerfacecolor="none", label="true landmarks"
