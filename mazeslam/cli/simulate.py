@@ -3,14 +3,13 @@ truth and map sidecars (and, with ``--plot``, a figure of the run)."""
 
 from __future__ import annotations
 
-import dataclasses
 from pathlib import Path
 
 import click
 
 from mazeslam.cli.options import BEAMS, DURATION, MAZE_SIDE, SEED
 from mazeslam.core.config import with_settings
-from mazeslam.core.outputs import prepare_output_file, staged_file
+from mazeslam.core.outputs import prepare_output_file
 from mazeslam.data import log, sidecars
 
 
@@ -65,12 +64,8 @@ def simulate(out, seed, maze, rows, cols, duration, beams, config_path, commands
     prepare_output_file(out)
     if plot_path:
         prepare_output_file(plot_path)
-    with staged_file(out) as staged:  # a full disk or an interrupt leaves the last log and sidecars as they were
-        result = run_simulation(
-            staged, config=config, maze=maze, seed=seed, duration=duration, policy=policy, progress=not quiet
-        )
-    result = dataclasses.replace(
-        result, log_path=out, truth_path=sidecars.truth_path(out), map_path=sidecars.map_path(out)
+    result = run_simulation(
+        out, config=config, maze=maze, seed=seed, duration=duration, policy=policy, progress=not quiet
     )
     click.echo(
         f"wrote {result.log_path} ({len(result.times)} records, {result.times[-1]:.1f} s simulated), "

@@ -15,6 +15,7 @@ counting the log's records from 0 (as the truth sidecar's rows).
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -24,6 +25,7 @@ from tqdm.auto import tqdm
 
 from mazeslam.core.config import load_toml, require, to_mapping
 from mazeslam.core.limits import duration_problem, maze_problem
+from mazeslam.core.outputs import staged_file
 from mazeslam.data import sidecars
 from mazeslam.data.log import LogWriter
 from mazeslam.sim.laser import LaserParams, VirtualLaser
@@ -193,6 +195,18 @@ def simulate(
         require(too_long is None, f"duration: {too_long}")
     too_short = too_short_problem(duration if duration is not None else config.max_duration, config.logger)
     require(too_short is None, f"{'duration' if duration is not None else 'max_duration'}: {too_short}")
+    out = Path(out)
+    with staged_file(out) as staged:  # a full disk or an interrupt leaves the last log and its sidecars as they were
+        result = _simulate_into(staged, config, maze, seed, duration, policy, progress)
+    return dataclasses.replace(
+        result, log_path=out, truth_path=sidecars.truth_path(out), map_path=sidecars.map_path(out)
+    )
+
+
+def _simulate_into(
+    out: Path, config: SimulationConfig, maze, seed: int, duration: float | None, policy, progress: bool
+) -> SimulationResult:
+    """``simulate``'s run, its log written to ``out`` (a staged path) with the sidecars beside it."""
     maze_rng, drive_rng, slip_rng, laser_rng, glitch_rng = (
         np.random.default_rng(s) for s in np.random.SeedSequence(seed).spawn(5)
     )
@@ -205,7 +219,6 @@ def simulate(
     laser = VirtualLaser(config.laser, walls.surfaces)
     policy = policy or ExplorerPolicy(maze, config.drive, drive_rng)
 
-    out = Path(out)
     logger = config.logger
     dt = 1.0 / logger.physics_rate
     end_time = duration if duration is not None else config.max_duration

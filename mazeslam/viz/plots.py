@@ -89,6 +89,26 @@ def draw_ellipses(
     )
 
 
+def mark_start(ax, poses: np.ndarray, colour: str) -> None:
+    """A hollow circle at the first of ``poses`` (R, 3) (world frame, m), labelled "start"."""
+    ax.plot(*poses[0, :2], "o", color=colour, markerfacecolor="white", markersize=8, label="start", zorder=5)
+
+
+def mark_end(ax, poses: np.ndarray, colour: str) -> None:
+    """An outlined square at the last of ``poses`` (R, 3), labelled "end", drawn over what lies
+    there (the particles gather where a path ends)."""
+    ax.plot(
+        *poses[-1, :2],
+        "s",
+        color=colour,
+        markerfacecolor="none",
+        markeredgewidth=2,
+        markersize=9,
+        label="end",
+        zorder=6,
+    )
+
+
 def save_figure(fig, ax, path: str | Path, title: str = "", legend_columns: int = 4, dpi: int = 120) -> Path:
     """Title ``ax``, put its legend below the plot, lay ``fig`` out (constrained layout, so neither
     the legend nor an axis label is cut off), save it to ``path`` (folders made; whole or not at

@@ -95,11 +95,10 @@ def draw_slam_figure(path, figure: SlamFigure) -> Path:
         )
     mean = figure.mean_poses
     ax.plot(mean[:, 0], mean[:, 1], color="tab:blue", linewidth=1.2, label="FastSLAM path")
-    ax.plot(*mean[0, :2], "o", color="tab:blue", markerfacecolor="white", markersize=8, label="start", zorder=5)
+    plots.mark_start(ax, mean, "tab:blue")
     particles = figure.particles  # they gather where the path ends: the end is an outline drawn over them
     ax.plot(particles[:, 0], particles[:, 1], ".", color="red", markersize=3, label="particles", zorder=5)
-    end = dict(markerfacecolor="none", markeredgewidth=2, markersize=9, zorder=6)
-    ax.plot(*mean[-1, :2], "s", color="tab:blue", label="end", **end)
+    plots.mark_end(ax, mean, "tab:blue")
     landmarks = figure.landmarks
     plots.draw_ellipses(ax, landmarks, figure.landmark_covariances)
     if len(landmarks):

@@ -16,7 +16,7 @@ def plot_smoothed(path, run: LoadedRun, smoothed: Smoothed, points: np.ndarray) 
     poses, its path (start and end marked) beside dead reckoning; with the sidecars, the walls (drawn
     over the points), true path and true corners."""
     from mazeslam.viz.backends import file_figure
-    from mazeslam.viz.plots import draw_ellipses, draw_walls, save_figure
+    from mazeslam.viz.plots import draw_ellipses, draw_walls, mark_end, mark_start, save_figure
 
     fig = file_figure(figsize=(9, 7))
     ax = fig.subplots()
@@ -34,9 +34,8 @@ def plot_smoothed(path, run: LoadedRun, smoothed: Smoothed, points: np.ndarray) 
     for label, (poses, colour) in paths.items():
         ax.plot(poses[:, 0], poses[:, 1], color=colour, linewidth=1.2, label=label)
     poses = smoothed.poses
-    ax.plot(*poses[0, :2], "o", color="tab:blue", markerfacecolor="white", markersize=8, label="start", zorder=5)
-    end = dict(markerfacecolor="none", markeredgewidth=2, markersize=9, zorder=6)  # as in slam.png
-    ax.plot(*poses[-1, :2], "s", color="tab:blue", label="end", **end)
+    mark_start(ax, poses, "tab:blue")
+    mark_end(ax, poses, "tab:blue")
     if len(run.true_corners):
         ax.plot(
             *run.true_corners.T, "o", color="tab:green", markersize=4, markerfacecolor="none", label="true landmarks"

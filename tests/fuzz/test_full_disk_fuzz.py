@@ -3,8 +3,8 @@ grow past a few KiB (``ulimit -f``: ``RLIMIT_FSIZE`` set in ``preexec_fn``), say
 naming the file it could not write, leaves no truncated file in place of a good one, and keeps the
 results of the run before it.
 
-Cases: 9 (slam with both maps at two limits, smooth, simulate at two limits, both imports); a
-subprocess each, so marked slow."""
+Cases: 10 (slam with both maps at two limits, smooth, simulate at two limits and through the Python
+API, both imports); a subprocess each, so marked slow."""
 
 from __future__ import annotations
 
@@ -89,3 +89,21 @@ def test_a_full_disk_names_the_file_and_keeps_the_last_results(data, tmp_path, c
     assert written, line
     assert Path(written.group(1)).parent == folder and Path(written.group(1)).name in before
     assert contents(folder) == before
+
+
+def test_the_python_simulate_on_a_full_disk_keeps_the_last_log(tmp_path):
+    """``mazeslam.simulate`` itself, not only the command, stages its log and sidecars."""
+    from mazeslam import simulate
+
+    simulate(tmp_path / "run.log", seed=1, duration=10.0, progress=False)
+    before = contents(tmp_path)
+    code = (
+        f"from mazeslam import simulate; simulate({str(tmp_path / 'run.log')!r}, seed=2, duration=10.0, progress=False)"
+    )
+
+    def small_files():
+        resource.setrlimit(resource.RLIMIT_FSIZE, (8 * KIB, resource.RLIM_INFINITY))
+
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, preexec_fn=small_files)
+    assert done.returncode != 0 and "File too large" in done.stderr
+    assert contents(tmp_path) == before
