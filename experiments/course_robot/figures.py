@@ -27,6 +27,7 @@ from mazeslam.evaluation.metrics import absolute_trajectory_error  # noqa: E402
 from mazeslam.evaluation.sharpness import TRUSTED_SPAN, dead_reckoning_without_glitches, paths_sharpness  # noqa: E402
 from mazeslam.pipeline import MapKind, SlamConfig, load_slam_config, run_slam  # noqa: E402
 from mazeslam.sim.simulator import load_config, simulate  # noqa: E402
+from mazeslam.viz import plots  # noqa: E402
 
 HERE = Path(__file__).resolve().parent
 PROJECT = HERE.parents[1]
@@ -59,25 +60,24 @@ def draw(run: LoadedRun, config: SlamConfig, title: str, out: Path) -> Path:
     for ax, (name, poses) in zip(axes, paths.items()):
         sharp = sharpness[name]
         points = scan_points_world(run.log, poses, run.geometry, *TRUSTED_SPAN)
-        if run.walls is not None:
-            for index, (x1, y1, x2, y2) in enumerate(run.walls):
-                ax.plot(
-                    [x1, x2], [y1, y2], color="tab:green", lw=2.5, alpha=0.35, label="true walls" if not index else None
-                )
-        ax.plot(points[:, 0], points[:, 1], ".", color="black", ms=1.0, alpha=0.5, label="scan returns 0.05-0.4 m")
+        ax.plot(*points.T, ".", color="black", ms=1.0, alpha=0.25, label="scan returns 0.05-0.4 m", rasterized=True)
+        plots.draw_walls(ax, run.walls, colour="tab:brown", linewidth=1.2, label="true walls")  # over the points
         if run.truth is not None:
             ax.plot(run.truth[:, 0], run.truth[:, 1], color="tab:green", lw=1.2, label="true path")
         ax.plot(poses[:, 0], poses[:, 1], color="tab:blue", lw=1.2, label=f"{name} path")
+        plots.mark_start(ax, poses, "tab:blue")
+        plots.mark_end(ax, poses, "tab:blue")
         label = f"{name}\n{sharp.cells} cells (x{sharp.ratio:.2f} of dead reckoning), extent x{sharp.extent_ratio:.2f}"
         if run.truth is not None:
             label += f"\nATE {1000 * absolute_trajectory_error(poses, run.truth)['rmse']:.1f} mm"
         ax.set_title(label, fontsize=9)
         ax.set(xlabel="x [m]", aspect="equal")
         ax.grid(True, lw=0.3)
-        ax.legend(loc="lower left", fontsize=7, markerscale=4)
+        legend = ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.1), fontsize=7, ncol=2)  # below the data
+        legend.legend_handles[0].set(markersize=5, alpha=1.0)  # the scan returns' dot, readable in the legend
     axes[0].set_ylabel("y [m]")
     fig.suptitle(title)
-    fig.savefig(out, dpi=110)
+    fig.savefig(out, dpi=110, bbox_inches="tight")  # the legends below the panels included
     plt.close(fig)
     return out
 

@@ -34,7 +34,7 @@ def draw_maze_env(env, slam: dict | None = None, size_pixels: int = 480) -> np.n
     if slam is not None:
         particles = slam.get("particles")
         if particles is not None:
-            ax.plot(particles[:, 0], particles[:, 1], ".", color="red", markersize=2, zorder=4)
+            ax.plot(particles[:, 0], particles[:, 1], ".", color="red", markersize=2, zorder=7)  # over the robot's disc
         landmarks = slam.get("landmarks")
         if landmarks is not None and len(landmarks):
             ax.plot(landmarks[:, 0], landmarks[:, 1], "+", color="tab:purple", markersize=8, zorder=4)

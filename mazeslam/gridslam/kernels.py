@@ -146,8 +146,11 @@ def lookup(field, world, distance, gradient):
     centres, into ``distance`` (N,), and its gradient (m/m) into ``gradient`` (N, 2). A cell's
     distance is searched the first time it is read (``_search``) and kept in ``memo`` (>= X * Y,),
     valid where ``stamps`` (>= X * Y,) holds this window's ``stamp`` (buffers reused from window to
-    window: they are never cleared). A
-    point outside the window takes the border cells' values (the interpolation then extrapolates).
+    window: they are never cleared). A point outside the cell centres' grid (less than half a cell
+    inside the window's edge, or beyond it) is interpolated between the two outermost rows or
+    columns of centres with its own fraction of a cell: neither clamped nor extrapolated, but a
+    sawtooth of one cell's period (as the reference filter's lookup; ``window_margin`` keeps the
+    end points away from the edge).
 
     One function for the whole batch of points: numba passes arrays to a compiled call with a
     reference count, which costs more than a memoised read, so the per-point work stays in this loop.

@@ -114,8 +114,9 @@ class LikelihoodField:
         return self.origin + (np.argwhere(self.values > self.threshold) + 0.5) * self.resolution
 
     def lookup(self, points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Bilinear distance (...,) at world ``points`` (..., 2) and its gradient (..., 2), m/m.
-        Points outside the window take the nearest border cells."""
+        """Bilinear distance (...,) m at world ``points`` (..., 2) m and its gradient (..., 2), m/m.
+        Points outside the cell centres' grid are interpolated between its two outermost rows or
+        columns with their own fraction of a cell (``mazeslam.gridslam.kernels.lookup``)."""
         flat = np.ascontiguousarray(points, dtype=float).reshape(-1, 2)
         value, gradient = np.empty(len(flat)), np.empty((len(flat), 2))
         self.kernels.lookup(self.kernel_field, flat, value, gradient)

@@ -9,7 +9,7 @@ import numpy as np
 from mazeslam.core.limits import grid_map_problem
 from mazeslam.core.motion import dead_reckoning
 from mazeslam.data.loaded_run import LoadedRun
-from mazeslam.gridslam.filter import GridSlamParams, run_grid_slam
+from mazeslam.gridslam.filter import GridDivergence, GridSlamParams, run_grid_slam
 from mazeslam.pipeline.config import MapKind, SlamConfig
 from mazeslam.pipeline.result import SlamResult
 
@@ -38,9 +38,12 @@ def grid_on_run(
     glitches = run.glitches(tolerance)
     reckoned = dead_reckoning(run.log, run.start_pose, glitches)
     _check_mappable(run, reckoned, glitches, params)
-    grid_run = run_grid_slam(
-        moved_by, run.geometry, run.start_pose, params, progress, snapshot_every, run.sensor_max_range, on_update
-    )
+    try:
+        grid_run = run_grid_slam(
+            moved_by, run.geometry, run.start_pose, params, progress, snapshot_every, run.sensor_max_range, on_update
+        )
+    except GridDivergence as error:  # it names the log's line, not the file
+        raise GridDivergence(f"{run.path}: {error}") from None
     mean, covariances = grid_run.record_trajectory(which="mean")
     seconds = np.zeros(len(run.log))
     seconds[grid_run.scan_records] = grid_run.seconds

@@ -16,7 +16,7 @@ from mazeslam.fastslam.filter import settings_hint
 from mazeslam.pipeline.config import MapKind, SlamConfig, load_slam_config
 from mazeslam.pipeline.fastslam_run import fastslam_on_run
 from mazeslam.pipeline.grid_run import grid_on_run
-from mazeslam.pipeline.log_kinds import SETTINGS, chosen_config, log_kind
+from mazeslam.pipeline.log_kinds import CONFIGS_FOLDER, SETTINGS, chosen_config, log_kind
 from mazeslam.pipeline.result import SlamResult
 from mazeslam.registration.scan_matching import LaserOdometry
 
@@ -49,10 +49,24 @@ def run_slam(
             f"run_slam takes a LoadedRun (load_run(path)), got {type(run).__name__}; for a log file: slam_on_file(path)"
         )
     config = as_config(config)
+    if on_update is not None:
+        on_update = _unchecked(on_update)
     with numbers_checked(run, config):
         if config.map.kind == MapKind.GRID:
             return grid_on_run(run, config, progress, snapshot_every, on_update)
         return fastslam_on_run(run, config, progress, snapshot_every, laser, on_update)
+
+
+def _unchecked(call):
+    """``call`` with the warning filters it would have outside ``numbers_checked``: a live view's
+    drawing may warn (matplotlib, an ellipse of a degenerate covariance) without its run failing."""
+
+    def with_default_warnings(*args):
+        with warnings.catch_warnings():
+            warnings.simplefilter("default", RuntimeWarning)
+            return call(*args)
+
+    return with_default_warnings
 
 
 class NumericalFailure(ValueError):
@@ -76,17 +90,25 @@ def numbers_checked(run: LoadedRun, config: SlamConfig) -> Iterator[None]:
 
 def _failure_message(run: LoadedRun, config: SlamConfig, error: Exception) -> str:
     """One line for a numerical failure of the filter ``config`` names on ``run``: what happened,
-    numpy's words, the settings to check and the config that fits the log's kind."""
+    numpy's words, the settings to check and the config that fits the log's kind (unless it is the
+    one that failed)."""
     if config.map.kind == MapKind.GRID:
         check = "check [grid] motion_noise and [grid.match] against this log"
     else:
         check = settings_hint(config.fastslam)
     fits = SETTINGS[log_kind(run)]
-    fitting = f"; {run.path.name} is {log_kind(run).value}: --config configs/{fits} fits it" if fits else ""
+    fitting = ""
+    if fits is not None and f"configs/{fits}" not in check and _is_not(config, CONFIGS_FOLDER / fits):
+        fitting = f"; {run.path.name} is {log_kind(run).value}: --config configs/{fits} fits it"
     return (
         f"{run.path}: the {config.map.kind.filter_name} diverged (numpy: {str(error) or type(error).__name__}: "
         f"a covariance or a weight went bad, the settings do not fit this log); {check}{fitting}"
     )
+
+
+def _is_not(config: SlamConfig, path: Path) -> bool:
+    """The config file ``path`` exists and holds other settings than ``config`` (the one that failed)."""
+    return path.exists() and load_slam_config(path) != config
 
 
 def slam_on_file(path: str | Path, config: SlamConfig | str | Path | None = None, progress: bool = True) -> SlamResult:

@@ -66,8 +66,11 @@ def window_backend() -> tuple[bool, str]:
 
 
 def is_interactive(backend: str) -> bool:
-    """``backend`` (a matplotlib backend's name) draws into windows."""
-    return backend.lower() not in NON_INTERACTIVE
+    """``backend`` (a matplotlib backend's name) draws into windows a user closes: not a file
+    backend, nor Jupyter's inline ones (their figures never close, so a view waiting for that would
+    wait forever)."""
+    name = backend.lower()
+    return name not in NON_INTERACTIVE and "inline" not in name and name != "nbagg"
 
 
 def render_mode(render: bool, video: bool) -> tuple[str | None, str | None]:

@@ -15,13 +15,13 @@ from matplotlib.figure import Figure
 from PIL import Image
 from tqdm.auto import tqdm
 
-from mazeslam.core.beams import SensorOverrides  # noqa: E402
-from mazeslam.core.config import jsonable, load_toml_section, with_changes  # noqa: E402
-from mazeslam.core.geometry import inverse, transform_points  # noqa: E402
-from mazeslam.data.beam_detection import convention_warning  # noqa: E402
-from mazeslam.data.scans import ScanSet, load_scans  # noqa: E402
-from mazeslam.features.corners import CornerExtractor, CornerParams, ScanFeatures  # noqa: E402
-from mazeslam.viz.corner_plots import ScanView, plot_scan  # noqa: E402
+from mazeslam.core.beams import SensorOverrides
+from mazeslam.core.config import jsonable, load_toml_section, with_changes
+from mazeslam.core.geometry import inverse, transform_points
+from mazeslam.data.beam_detection import convention_warning
+from mazeslam.data.scans import ScanSet, load_scans
+from mazeslam.features.corners import CornerExtractor, CornerParams, ScanFeatures
+from mazeslam.viz.corner_plots import ScanView, plot_scan
 
 
 @dataclass

@@ -5,7 +5,7 @@ never a traceback of another kind, never a warning, never a hang; a refusal chan
 episode goes on.
 
 Property-based (hypothesis, derandomized like tests/data/test_fuzz.py). Cases: 4 tests x 175
-drawn examples = 700, and 7 reproducers (one an expected failure); 707 in all.
+drawn examples = 700, and 7 reproducers; 707 in all.
 """
 
 from __future__ import annotations

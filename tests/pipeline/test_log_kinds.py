@@ -11,13 +11,13 @@ import pytest
 from cli_runs import cli
 from conftest import PROJECT_ROOT
 
-from mazeslam.core.config import InputError
+from mazeslam.core.config import InputError, with_settings
 from mazeslam.data import log, sidecars
 from mazeslam.data.carmen import import_carmen
 from mazeslam.data.loaded_run import load_run
 from mazeslam.data.mrclam import import_mrclam
 from mazeslam.pipeline import MapKind, SlamConfig, load_slam_config, slam_on_file
-from mazeslam.pipeline.log_kinds import LogKind, chosen_config, log_kind
+from mazeslam.pipeline.log_kinds import CONFIGS_FOLDER, LogKind, chosen_config, log_kind
 from mazeslam.pipeline.run import NumericalFailure, numbers_checked
 from mazeslam.sim.laser import cast_rays
 from mazeslam.sim.simulator import SimulationConfig
@@ -166,10 +166,23 @@ def test_a_numerical_failure_says_what_it_means_and_which_config_fits(mrclam_log
     """numpy's errors inside a run (a singular matrix; a division by zero, a warning otherwise)
     leave as one line that names the log, the filter, numpy's words and the config that fits."""
     run, config = load_run(mrclam_log), SlamConfig()
-    for failing in (lambda: np.linalg.inv(np.zeros((2, 2))), lambda: np.log(np.zeros(1))):
+    cases = (
+        (lambda: np.linalg.inv(np.zeros((2, 2))), "Singular matrix"),
+        (lambda: np.log(np.zeros(1)), "divide by zero"),
+    )
+    for failing, numpys_words in cases:
         with pytest.raises(NumericalFailure) as error, numbers_checked(run, config):
             failing()
         message = str(error.value)
         assert message.startswith(f"{mrclam_log}: the FastSLAM diverged (numpy: ")
-        assert "--config configs/mrclam.toml fits it" in message and "\n" not in message
-    assert "Singular matrix" in message or "divide by zero" in message
+        assert numpys_words in message
+        assert message.count("--config configs/mrclam.toml") == 1 and "\n" not in message  # said once
+
+
+def test_a_numerical_failure_does_not_send_the_user_back_to_the_config_that_failed(mrclam_log):
+    run = load_run(mrclam_log)
+    grid = with_settings(SlamConfig(), {"map.kind": "grid"})
+    for config, fits_it in ((grid, True), (load_slam_config(CONFIGS_FOLDER / "mrclam.toml"), False)):
+        with pytest.raises(NumericalFailure) as error, numbers_checked(run, config):
+            np.linalg.inv(np.zeros((2, 2)))
+        assert ("configs/mrclam.toml fits it" in str(error.value)) == fits_it

@@ -6,7 +6,10 @@ backend has not been chosen yet."""
 import subprocess
 import sys
 
+import pytest
 from conftest import PROJECT_ROOT
+
+from mazeslam.viz.backends import is_interactive
 
 #: Every module that draws, imported together (each forced Agg on import before).
 DRAWING_MODULES = (
@@ -78,3 +81,19 @@ for render, video in ((True, False), (True, True), (False, True), (False, False)
     print(mode, "note" if note and "no display" in note and "\\n" not in note else note)
 """
     assert python(code) == ["None", "note", "rgb_array", "note", "rgb_array", "None", "None", "None"]
+
+
+@pytest.mark.parametrize(
+    "backend, window",
+    [
+        ("TkAgg", True),
+        ("QtAgg", True),
+        ("agg", False),
+        ("pdf", False),
+        ("nbAgg", False),
+        ("module://matplotlib_inline.backend_inline", False),
+    ],
+)
+def test_only_backends_with_windows_a_user_closes_count_as_interactive(backend, window):
+    """Jupyter's inline figures never close: a live view waiting for that would wait forever."""
+    assert is_interactive(backend) is window
