@@ -40,12 +40,20 @@ import numpy as np
 
 from mazeslam.core.beams import BeamGeometry
 from mazeslam.core.config import check_setting, require
-from mazeslam.core.geometry import advance_pose, compose, relative, transform_points, wrap_angle
+from mazeslam.core.geometry import advance_pose, compose, relative, wrap_angle
 from mazeslam.core.motion import OdometryNoise, dead_reckoning
 from mazeslam.core.resampling import effective_sample_size, normalized_weights, systematic_resample
 from mazeslam.data.log import CourseLog
 from mazeslam.gridslam.matching import DistanceMemo, LikelihoodField, MatchParams, match_points, match_pose, refine_pose
-from mazeslam.gridslam.occupancy import GridParams, ScanRays, TiledGrid, distinct_tile_bytes, integrate_scan, scan_rays
+from mazeslam.gridslam.occupancy import (
+    GridParams,
+    ScanRays,
+    TiledGrid,
+    Window,
+    distinct_tile_bytes,
+    integrate_scan,
+    scan_rays,
+)
 from mazeslam.registration.correlative import CorrelativeParams, LikelihoodGrid, correlative_candidates
 from mazeslam.registration.scan_matching import ScanMatchParams, laser_odometry
 
@@ -197,16 +205,20 @@ class ScanUpdate:
     indexes: np.ndarray | None
 
 
-def motion_nis(matched: np.ndarray, predicted: np.ndarray, covariance: np.ndarray) -> float:
+def motion_nis(matched: np.ndarray, predicted: np.ndarray, covariance: np.ndarray):
     """How far the scan match moved a particle from its prediction, against the motion's noise:
-    ``d^T Q^-1 d`` for ``d = matched - predicted`` (3,) (world frame, heading wrapped) and the
+    ``d^T Q^-1 d`` for ``d = matched - predicted`` (3,) (world frame, heading wrapped; (P, 3) for
+    several particles, giving (P,)) and the
     motion's covariance ``Q`` (3, 3) (x and y variances equal, so it is the same in the world
     frame). Where ``Q`` states the laser odometry's error right, it averages 3 (3 degrees of
     freedom, chi-square 95 % point 7.81): much less, ``Q`` is wider than the errors the scans
     correct; much more, narrower. It needs no truth."""
-    offset = matched - predicted
-    offset[2] = wrap_angle(offset[2])
-    return float(offset @ np.linalg.solve(covariance, offset))
+    offset = np.asarray(matched - predicted, dtype=float)
+    offset[..., 2] = wrap_angle(offset[..., 2])
+    values = np.einsum(
+        "...i,...i->...", offset, np.linalg.solve(covariance, offset.reshape(-1, 3).T).T.reshape(offset.shape)
+    )
+    return float(values) if offset.ndim == 1 else values
 
 
 def _weighted_nis(nis: np.ndarray, weights: np.ndarray) -> float:
@@ -223,10 +235,12 @@ STENCIL = np.array(list(itertools.product((-1.0, 0.0, 1.0), repeat=3)))
 
 
 def gaussian(mean: np.ndarray, covariance: np.ndarray, normal: np.ndarray) -> np.ndarray:
-    """A draw (3,) from ``N(mean, covariance)`` (3,), (3, 3) made of a standard normal draw
-    ``normal`` (3,), as numpy's ``multivariate_normal(method="eigh")`` makes it."""
+    """A draw (..., 3) from ``N(mean, covariance)`` (..., 3), (..., 3, 3) made of a standard normal
+    draw ``normal`` (..., 3), as numpy's ``multivariate_normal(method="eigh")`` makes it (one
+    decomposition per matrix of the stack)."""
     values, vectors = np.linalg.eigh(covariance)
-    return mean + normal @ (vectors * np.sqrt(np.abs(values))).T
+    factor = vectors * np.sqrt(np.abs(values))[..., None, :]
+    return mean + np.einsum("...j,...ij->...i", normal, factor)
 
 
 @dataclass(frozen=True)
@@ -247,11 +261,18 @@ class Proposal:
     mean: np.ndarray
     covariance: np.ndarray
 
-    def draw(self, normal: np.ndarray) -> np.ndarray:
-        """The new pose (3,) drawn from the proposal with the standard normal draw ``normal`` (3,)."""
-        pose = self.centre + gaussian(self.mean, self.covariance, normal)
-        pose[2] = wrap_angle(pose[2])
-        return pose
+
+def _bounds(starts: np.ndarray, points: np.ndarray, with_starts: bool = False) -> np.ndarray:
+    """Per particle, the box (P, 2, 2) (lower and upper corner, world, m) of ``points`` (N, 2)
+    (robot frame) placed at each of its ``starts`` (P, K, 3), and of the starts' own positions with
+    ``with_starts``."""
+    cos_t, sin_t = np.cos(starts[..., 2:3]), np.sin(starts[..., 2:3])  # (P, K, 1)
+    x = starts[..., :1] + cos_t * points[:, 0] - sin_t * points[:, 1]  # (P, K, N)
+    y = starts[..., 1:2] + sin_t * points[:, 0] + cos_t * points[:, 1]
+    placed = np.stack([x, y], axis=-1).reshape(len(starts), -1, 2)
+    if with_starts:
+        placed = np.concatenate([placed, starts[..., :2]], axis=1)
+    return np.stack([placed.min(axis=1), placed.max(axis=1)], axis=1)
 
 
 @dataclass(frozen=True)
@@ -311,50 +332,88 @@ class GridSlam:
         predicted = compose(self.poses, motion)  # (P, 3)
         _check_finite(predicted, np.zeros(count), motion)
         normals = self.rng.standard_normal((count, 3))  # each particle's draw, in particle order
-        log_etas, nis, matched = np.zeros(count), np.full(count, np.nan), 0
-        weights = self.weights
+        starts = compose(predicted[:, None], np.vstack([np.zeros(3), offsets])[None])  # (P, 1 + C, 3)
+        reach = _bounds(starts, rays.reach, with_starts=True)  # (P, 2, 2) what the scan updates
+        seen = _bounds(starts, points) if len(points) >= 3 else None  # (P, 2, 2) where it is matched
+        # 1. each particle's proposal against its own map (a Python loop over compiled matches)
+        windows, proposals = [], []
         for index, grid in enumerate(self.maps):
-            starts = np.vstack([predicted[index], compose(predicted[index], offsets).reshape(-1, 3)])  # (1 + C, 3)
-            reach = np.vstack([transform_points(start, rays.reach) for start in starts] + [starts[:, :2]])
-            window = grid.window(*grid.tile_range(reach, self.params.window_margin))
-            proposal = None
-            if grid.tiles and len(points) >= 3:
-                seen = np.vstack([transform_points(start, points) for start in starts])
-                field = LikelihoodField(window.crop(seen, self.params.window_margin), self.params.match, self.memo)
-                if field.has_occupied:
-                    seeds = starts if self.search_every_scan else None
-                    proposal = self._propose(field, points, predicted[index], information, seeds)
-                    log_etas[index] = proposal.log_eta
-            if proposal is not None and proposal.accepted:
-                self.poses[index] = proposal.draw(normals[index])
-                nis[index] = motion_nis(self.poses[index], predicted[index], covariance)
-                matched += 1
-            else:
-                self.poses[index] = self._unmatched_draw(index, motion, covariance, normals[index])
-            grid.store(window, integrate_scan(window, rays, self.poses[index], self.params.grid))
+            windows.append(grid.window(*grid.tile_range(reach[index], self.params.window_margin)))
+            proposals.append(
+                self._proposal(grid, windows[index], seen, index, points, predicted[index], information, starts[index])
+            )
+        # 2. the draws, all at once
+        accepted = np.array([proposal is not None and proposal.accepted for proposal in proposals])
+        log_etas = np.array([0.0 if proposal is None else proposal.log_eta for proposal in proposals])
+        self.poses = self._drawn(proposals, accepted, motion, covariance, normals)
+        nis = np.where(accepted, motion_nis(self.poses, predicted, covariance), np.nan)
+        # 3. each particle's scan into its own map
+        for index, grid in enumerate(self.maps):
+            grid.store(windows[index], integrate_scan(windows[index], rays, self.poses[index], self.params.grid))
         _check_finite(self.poses, log_etas, motion)
+        weights = self.weights
         self.log_likelihoods += log_etas - log_etas.max()
         self.log_weights += (log_etas - log_etas.max()) / (self.params.observation_gain * count)
         return ScanUpdate(
-            matched / count,
+            accepted.mean(),
             _weighted_nis(nis, weights),
             effective_sample_size(self.weights),
             self._resample_if_needed(),
         )
 
-    def _unmatched_draw(self, index: int, motion: np.ndarray, covariance: np.ndarray, normal: np.ndarray) -> np.ndarray:
-        """The pose (3,) of particle ``index`` moved by ``motion`` (3,) with noise where its match
-        failed or nothing of its map lies near the scan, drawn with its standard normal ``normal``
-        (3,): ``covariance`` (3, 3), or, before its first scan, the motion noise alone, without
-        ``motion_floor``. The floor stands for the laser odometry's errors between scans; the
-        motion to the first scan is odometry from the known start pose (none when the first record
-        is a scan), and a floor there would turn each particle's whole map by its draw. Drawn at
-        all, not taken as it is, because the map's frame inherits that motion's error: on the
-        simulated building the first 0.5 m (0.01 rad off) taken without noise left the mean path's
-        pose NEES at 17-40 (3 is consistent)."""
+    def _proposal(
+        self,
+        grid: TiledGrid,
+        window: Window,
+        seen: np.ndarray | None,
+        index: int,
+        points: np.ndarray,
+        predicted: np.ndarray,
+        information: np.ndarray,
+        starts: np.ndarray,
+    ) -> Proposal | None:
+        """Particle ``index``'s proposal (``_propose``) over ``window`` of its map ``grid``, cropped
+        to ``seen[index]`` (2, 2) widened by ``window_margin``; None where there is nothing to match
+        (no map yet, under 3 points, no occupied cell near them)."""
+        if not grid.tiles or seen is None:
+            return None
+        field = LikelihoodField(window.crop(seen[index], self.params.window_margin), self.params.match, self.memo)
+        if not field.has_occupied:
+            return None
+        seeds = starts if self.search_every_scan else None
+        return self._propose(field, points, predicted, information, seeds)
+
+    def _drawn(
+        self, proposals: list, accepted: np.ndarray, motion: np.ndarray, covariance: np.ndarray, normals: np.ndarray
+    ) -> np.ndarray:
+        """The new poses (P, 3), drawn with the standard normals ``normals`` (P, 3): from its
+        proposal for a particle whose match was accepted (``accepted`` (P,)), else by the motion
+        model (``_unmatched_covariance``)."""
+        means, covariances, centres = np.zeros((len(proposals), 3)), np.empty((len(proposals), 3, 3)), self.poses
+        for index, proposal in enumerate(proposals):
+            if accepted[index]:
+                means[index], covariances[index] = proposal.mean, proposal.covariance
+            else:
+                covariances[index] = self._unmatched_covariance(index, motion, covariance)
+        noise = gaussian(means, covariances, normals)
+        moved = compose(centres, motion + noise)  # where the match failed: the motion model
+        centres = np.array([proposal.centre if ok else np.zeros(3) for proposal, ok in zip(proposals, accepted)])
+        drawn = centres + noise
+        drawn[:, 2] = wrap_angle(drawn[:, 2])
+        return np.where(accepted[:, None], drawn, moved)
+
+    def _unmatched_covariance(self, index: int, motion: np.ndarray, covariance: np.ndarray) -> np.ndarray:
+        """The noise (3, 3) particle ``index`` moves by ``motion`` (3,) with where its match failed or
+        nothing of its map lies near the scan: ``covariance`` (3, 3), or, before its first scan, the
+        motion noise alone, without ``motion_floor``. The floor stands for the laser odometry's
+        errors between scans; the motion to the first scan is odometry from the known start pose
+        (none when the first record is a scan), and a floor there would turn each particle's whole
+        map by its draw. Drawn at all, not taken as it is, because the map's frame inherits that
+        motion's error: on the simulated building the first 0.5 m (0.01 rad off) taken without noise
+        left the mean path's pose NEES at 17-40 (3 is consistent)."""
         if not self.maps[index].tiles:
-            covariance = self.params.motion_noise.relative_covariance(motion)
-        return compose(self.poses[index], motion + gaussian(np.zeros(3), covariance, normal))
+            return self.params.motion_noise.relative_covariance(motion)
+        return covariance
 
     def _propose(
         self,
