@@ -50,6 +50,7 @@ from mazeslam.gridslam.occupancy import (
     ScanRays,
     TiledGrid,
     Window,
+    crop_cells,
     distinct_tile_bytes,
     integrate_scan,
     scan_rays,
@@ -335,12 +336,14 @@ class GridSlam:
         starts = compose(predicted[:, None], np.vstack([np.zeros(3), offsets])[None])  # (P, 1 + C, 3)
         reach = _bounds(starts, rays.reach, with_starts=True)  # (P, 2, 2) what the scan updates
         seen = _bounds(starts, points) if len(points) >= 3 else None  # (P, 2, 2) where it is matched
+        lowers, uppers = self.maps[0].tile_range(reach, self.params.window_margin)  # (P, 2) each: the windows
+        crops = self._crops(seen, lowers, uppers)
         # 1. each particle's proposal against its own map (a Python loop over compiled matches)
         windows, proposals = [], []
         for index, grid in enumerate(self.maps):
-            windows.append(grid.window(*grid.tile_range(reach[index], self.params.window_margin)))
+            windows.append(grid.window(lowers[index], uppers[index]))
             proposals.append(
-                self._proposal(grid, windows[index], seen, index, points, predicted[index], information, starts[index])
+                self._proposal(grid, windows[index], crops, index, points, predicted[index], information, starts[index])
             )
         # 2. the draws, all at once
         accepted = np.array([proposal is not None and proposal.accepted for proposal in proposals])
@@ -365,7 +368,7 @@ class GridSlam:
         self,
         grid: TiledGrid,
         window: Window,
-        seen: np.ndarray | None,
+        crops: tuple[np.ndarray, np.ndarray] | None,
         index: int,
         points: np.ndarray,
         predicted: np.ndarray,
@@ -373,15 +376,28 @@ class GridSlam:
         starts: np.ndarray,
     ) -> Proposal | None:
         """Particle ``index``'s proposal (``_propose``) over ``window`` of its map ``grid``, cropped
-        to ``seen[index]`` (2, 2) widened by ``window_margin``; None where there is nothing to match
-        (no map yet, under 3 points, no occupied cell near them)."""
-        if not grid.tiles or seen is None:
+        to its cells of ``crops`` (``_crops``); None where there is nothing to match (no map yet,
+        under 3 points, no occupied cell near them)."""
+        if not grid.tiles or crops is None:
             return None
-        field = LikelihoodField(window.crop(seen[index], self.params.window_margin), self.params.match, self.memo)
+        low, high = crops
+        field = LikelihoodField(window.view(low[index], high[index]), self.params.match, self.memo)
         if not field.has_occupied:
             return None
         seeds = starts if self.search_every_scan else None
         return self._propose(field, points, predicted, information, seeds)
+
+    def _crops(
+        self, seen: np.ndarray | None, lowers: np.ndarray, uppers: np.ndarray
+    ) -> tuple[np.ndarray, np.ndarray] | None:
+        """The cells (low (P, 2), high (P, 2)) of each particle's window, tiles ``lowers`` ..
+        ``uppers`` (P, 2), that its likelihood field covers: the box ``seen`` (P, 2, 2) of the end
+        points widened by ``window_margin`` (None without points to match)."""
+        if seen is None:
+            return None
+        origins = lowers * self.maps[0].tile_metres  # as TiledGrid.window places them
+        shapes = (uppers - lowers) * self.params.grid.tile_size
+        return crop_cells(seen, self.params.window_margin, origins, shapes, self.params.grid.resolution)
 
     def _drawn(
         self, proposals: list, accepted: np.ndarray, motion: np.ndarray, covariance: np.ndarray, normals: np.ndarray

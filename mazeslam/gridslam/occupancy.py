@@ -87,10 +87,10 @@ class TiledGrid:
         return self.params.tile_size * self.params.resolution
 
     def tile_range(self, points: np.ndarray, margin: float) -> tuple[np.ndarray, np.ndarray]:
-        """The tiles (lower (2,), upper (2,), upper exclusive) covering ``points`` (N, 2) (world,
-        m) widened by ``margin`` metres."""
-        lower = np.floor((points.min(axis=0) - margin) / self.tile_metres).astype(int)
-        upper = np.floor((points.max(axis=0) + margin) / self.tile_metres).astype(int) + 1
+        """The tiles (lower (..., 2), upper (..., 2), upper exclusive) covering ``points`` (..., N, 2)
+        (world, m) widened by ``margin`` metres (one range per leading index)."""
+        lower = np.floor((points.min(axis=-2) - margin) / self.tile_metres).astype(int)
+        upper = np.floor((points.max(axis=-2) + margin) / self.tile_metres).astype(int) + 1
         return lower, upper
 
     def window(self, lower: np.ndarray, upper: np.ndarray) -> Window:
@@ -142,16 +142,30 @@ class Window:
     def crop(self, points: np.ndarray, margin: float) -> Window:
         """A view of the cells around ``points`` (N, 2) (world, m) widened by ``margin`` m, within
         this window; for reading only (``TiledGrid.store`` takes whole windows)."""
-        low = np.floor((points.min(axis=0) - margin - self.origin) / self.resolution).astype(int)
-        high = np.ceil((points.max(axis=0) + margin - self.origin) / self.resolution).astype(int)
-        low = np.clip(low, 0, np.array(self.values.shape) - 2)
-        high = np.clip(high, low + 2, self.values.shape)
+        box = np.stack([points.min(axis=0), points.max(axis=0)])
+        return self.view(*crop_cells(box, margin, self.origin, np.array(self.values.shape), self.resolution))
+
+    def view(self, low: np.ndarray, high: np.ndarray) -> Window:
+        """The cells ``low`` .. ``high`` (each (2,), high exclusive) of this window, in place."""
         return Window(
             self.values[low[0] : high[0], low[1] : high[1]],
             self.origin + low * self.resolution,
             self.resolution,
             self.lower_tile,
         )
+
+
+def crop_cells(
+    box: np.ndarray, margin: float, origin: np.ndarray, shape: np.ndarray, resolution: float
+) -> tuple[np.ndarray, np.ndarray]:
+    """The cells (low (..., 2), high (..., 2), high exclusive) of windows of ``shape`` (..., 2) cells
+    whose cell [0, 0] lies at ``origin`` (..., 2) (m) that cover ``box`` (..., 2, 2) (lower and upper
+    corner, world, m) widened by ``margin`` m: within the window, at least 2 cells a side."""
+    low = np.floor((box[..., 0, :] - margin - origin) / resolution).astype(int)
+    high = np.ceil((box[..., 1, :] + margin - origin) / resolution).astype(int)
+    low = np.clip(low, 0, shape - 2)
+    high = np.clip(high, low + 2, shape)
+    return low, high
 
 
 @dataclass(frozen=True)
