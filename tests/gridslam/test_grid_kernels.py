@@ -123,3 +123,13 @@ def test_the_compiled_filter_runs_as_the_reference_with_the_same_seed(building_l
     np.testing.assert_allclose(compiled.particles.log_weights, reference.particles.log_weights, atol=1e-6)
     np.testing.assert_array_equal(compiled.resampled, reference.resampled)
     np.testing.assert_array_equal(compiled.grid.dense()[0], reference.grid.dense()[0])
+
+
+def test_the_precompile_room_is_measured_to_its_walls():
+    from mazeslam.gridslam.precompile import ROOM, room_log, room_ranges
+
+    ranges = room_ranges(np.array([0.0, 0.0, 0.0]), np.array([0.0, np.pi / 2, np.pi, -np.pi / 2, np.pi / 4]))
+    np.testing.assert_allclose(ranges, [4.0, 1.5, 1.0, 1.5, 1.5 * np.sqrt(2)])
+    course_log, geometry = room_log(scans=3)
+    assert list(course_log.flags) == [0, 1, 0, 1, 0, 1] and course_log.width == len(geometry.bearings(course_log.width))
+    assert np.all(course_log.values[1::2] <= np.hypot(*(ROOM[1] - ROOM[0])))

@@ -1,0 +1,60 @@
+"""Compile the grid filter's kernels into numba's cache before a first run needs them.
+
+``python -m mazeslam.gridslam.precompile`` (``make install`` runs it) runs the filter, in both
+search modes, over a few noise-free scans of a rectangular room: that calls every kernel with the
+argument types a real run passes, so numba compiles each once (about 10 s) and later runs load them
+from the cache (``mazeslam.gridslam.kernels``). Without it the first grid run on a machine compiles
+them itself.
+"""
+
+from __future__ import annotations
+
+import time
+
+import numpy as np
+
+from mazeslam.core.beams import BeamGeometry
+from mazeslam.data.log import ODOMETRY, SCAN, CourseLog
+from mazeslam.gridslam.filter import GridSlamParams, MotionSource, SearchMode, run_grid_slam
+
+#: The room: lower and upper corner of its walls, m.
+ROOM = np.array([[-1.0, -1.5], [4.0, 1.5]])
+BEAMS = 90
+STEP = 0.6  # m between scans: more than the default linear_update, so that every scan is processed
+
+
+def room_ranges(pose: np.ndarray, bearings: np.ndarray) -> np.ndarray:
+    """Ranges (N,) m from ``pose`` (3,) along ``bearings`` (N,) rad to the walls of ``ROOM``."""
+    direction = np.column_stack([np.cos(pose[2] + bearings), np.sin(pose[2] + bearings)])  # (N, 2)
+    with np.errstate(divide="ignore"):
+        to_walls = (np.where(direction > 0, ROOM[1], ROOM[0]) - pose[:2]) / direction  # (N, 2) along each axis
+    return np.min(np.where(to_walls > 0, to_walls, np.inf), axis=1)
+
+
+def room_log(scans: int = 6) -> tuple[CourseLog, BeamGeometry]:
+    """A log driving straight along x through ``ROOM``: an odometry record of ``STEP`` m, then a scan."""
+    geometry = BeamGeometry()
+    bearings = geometry.bearings(BEAMS)
+    times, flags, rows = [], [], []
+    for index in range(scans):
+        odometry = np.full(BEAMS, -1.0)
+        odometry[:2] = (STEP if index else 0.0, 0.0)
+        pose = np.array([index * STEP, 0.0, 0.0])
+        for flag, row in ((ODOMETRY, odometry), (SCAN, room_ranges(pose, bearings))):
+            times.append(0.5 * len(times))
+            flags.append(flag)
+            rows.append(row)
+    return CourseLog(np.array(times), np.array(flags), np.array(rows)), geometry
+
+
+def main() -> None:
+    began = time.perf_counter()
+    course_log, geometry = room_log()
+    for search in SearchMode:
+        params = GridSlamParams(particles=3, motion=MotionSource.WHEELS, search=search)
+        run_grid_slam(course_log, geometry, np.zeros(3), params)
+    print(f"the grid filter's kernels are compiled and cached ({time.perf_counter() - began:.1f} s)")
+
+
+if __name__ == "__main__":
+    main()
