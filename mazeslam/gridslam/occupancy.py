@@ -238,9 +238,12 @@ def integrate_scan(window: Window, rays: ScanRays, pose: np.ndarray, params: Gri
 
 
 def distinct_tile_bytes(grids: list[TiledGrid]) -> int:
-    """Bytes of cells held by ``grids`` together, each shared tile counted once."""
-    unique = {id(tile): tile.nbytes for grid in grids for tile in grid.tiles.values()}
-    return sum(unique.values())
+    """Bytes of cells held by ``grids`` together, each shared tile counted once (every tile is a
+    ``tile_size`` square of float32)."""
+    if not grids:
+        return 0
+    distinct = set().union(*(map(id, grid.tiles.values()) for grid in grids))
+    return len(distinct) * grids[0].params.tile_size**2 * np.dtype(np.float32).itemsize
 
 
 def grid_states(grid: TiledGrid, occupied_above: float = 0.0, free_below: float = 0.0) -> OccupancyMap:
