@@ -243,7 +243,7 @@ def distinct_tile_bytes(grids: list[TiledGrid]) -> int:
     if not grids:
         return 0
     distinct = set().union(*(map(id, grid.tiles.values()) for grid in grids))
-    return len(distinct) * grids[0].params.tile_size**2 * np.dtype(np.float32).itemsize
+    return len(distinct) * grids[0].params.tile_size ** 2 * np.dtype(np.float32).itemsize
 
 
 def grid_states(grid: TiledGrid, occupied_above: float = 0.0, free_below: float = 0.0) -> OccupancyMap:
