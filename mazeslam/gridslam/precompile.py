@@ -35,7 +35,9 @@ def room_log(scans: int = 6) -> tuple[CourseLog, BeamGeometry]:
     """A log driving straight along x through ``ROOM``: an odometry record of ``STEP`` m, then a scan."""
     geometry = BeamGeometry()
     bearings = geometry.bearings(BEAMS)
-    times, flags, rows = [], [], []
+    times: list[float] = []
+    flags: list[int] = []
+    rows: list[np.ndarray] = []
     for index in range(scans):
         odometry = np.full(BEAMS, -1.0)
         odometry[:2] = (STEP if index else 0.0, 0.0)
