@@ -19,6 +19,7 @@ exits with 128 + the signal's number (143, 130), as a process killed by it would
 
 from __future__ import annotations
 
+import _thread
 import contextlib
 import importlib
 import multiprocessing
@@ -196,24 +197,71 @@ class Interrupted(SystemExit):
         return signal.Signals(self.signum).name
 
 
+#: Seconds after which a stop is raised again in the main thread when it has not left
+#: ``stop_on_signals``'s block: the first ``Interrupted`` can be swallowed by library code that
+#: catches every exception (seen: raised inside numpy's lazy import of ``numpy.random``, after which
+#: the run went on and ended with status 0). Longer than a clean stop's own cleanup takes (a side
+#: process gets ``STOP_SECONDS``).
+INSIST_SECONDS = 5.0
+
+
+class _Stop:
+    """The signal ``stop_on_signals`` received, raised as ``Interrupted`` until it leaves the block."""
+
+    def __init__(self) -> None:
+        self.signum: int | None = None
+        self.repeating = False  # the next call of ``handle`` is ``insist``'s, not a signal's
+        self.left = False
+
+    def handle(self, signum: int, frame: object) -> None:
+        """The signal handler: raise ``Interrupted``; a second signal (a clean stop that does not
+        end) gets the default action, which kills the process, its children ending with it."""
+        if self.repeating:
+            self.repeating = False
+        elif self.signum is not None:
+            signal.signal(signum, signal.SIG_DFL)
+            signal.raise_signal(signum)
+            return
+        self.signum = signum
+        timer = threading.Timer(INSIST_SECONDS, self.insist)
+        timer.daemon = True
+        timer.start()
+        raise Interrupted(signum)
+
+    def insist(self) -> None:
+        """Raise the stop again in the main thread if it has not left the block (``INSIST_SECONDS``)."""
+        if not self.left and self.signum is not None:
+            self.repeating = True
+            _thread.interrupt_main(signal.Signals(self.signum))
+
+
 @contextlib.contextmanager
 def stop_on_signals(signals: Sequence[int] = (signal.SIGTERM, signal.SIGINT)) -> Iterator[None]:
-    """Within the block, each of ``signals`` raises ``Interrupted`` in the main thread, once: the
-    handler gives the signal its default action back, so that a second one (a clean stop that does
-    not end) kills the process, its children ending with it. The earlier handlers are restored on
-    leaving. Outside the main thread (where Python cannot set handlers), and for a signal whose
-    handler was set outside Python (which could not be put back), nothing changes."""
+    """Within the block, each of ``signals`` raises ``Interrupted`` in the main thread; a second
+    one gets the signal's default action (a clean stop that does not end kills the process, its
+    children ending with it). A stop that some library swallowed is raised again after
+    ``INSIST_SECONDS``, and a block that ends normally after a stop still ends in ``Interrupted``:
+    a signalled command never reports success. The earlier handlers are restored on leaving.
+    Outside the main thread (where Python cannot set handlers), and for a signal whose handler was
+    set outside Python (which could not be put back), nothing changes."""
     if threading.current_thread() is not threading.main_thread():
         yield
         return
-
-    def interrupt(signum: int, frame: object) -> None:
-        signal.signal(signum, signal.SIG_DFL)
-        raise Interrupted(signum)
-
-    previous = {signum: signal.signal(signum, interrupt) for signum in signals if signal.getsignal(signum) is not None}
+    stop = _Stop()
+    handled = [signum for signum in signals if signal.getsignal(signum) is not None]
+    previous = {signum: signal.signal(signum, stop.handle) for signum in handled}
     try:
         yield
+    except Interrupted:
+        raise
+    except SystemExit:  # click ends even a successful command with SystemExit(0)
+        if stop.signum is not None:  # a stop was raised and swallowed on its way up
+            raise Interrupted(stop.signum) from None
+        raise
+    else:
+        if stop.signum is not None:
+            raise Interrupted(stop.signum)
     finally:
+        stop.left = True
         for signum, handler in previous.items():
             signal.signal(signum, handler)

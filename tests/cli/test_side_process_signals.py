@@ -146,3 +146,22 @@ def test_stop_on_signals_unwinds_and_exits_with_128_plus_the_signal(name, status
     assert out.splitlines() == [f"caught {name} {status} True", "unwound"], err
     assert script.returncode == status
     assert "Traceback" not in err
+
+
+@pytest.mark.parametrize("ending", ["normally", "with SystemExit(0)"])
+def test_a_stop_swallowed_by_library_code_still_ends_in_interrupted(ending):
+    """A signal's ``Interrupted`` raised inside code that catches everything (seen: numpy's lazy
+    import of numpy.random) was lost, and the command went on and exited 0 (click ends with
+    SystemExit(0))."""
+    from mazeslam.cli.side_process import Interrupted, stop_on_signals
+
+    before = signal.getsignal(signal.SIGTERM)
+    with pytest.raises(Interrupted) as stopped, stop_on_signals():
+        try:
+            signal.raise_signal(signal.SIGTERM)
+        except BaseException:  # the library that swallows it
+            pass
+        if ending != "normally":
+            raise SystemExit(0)
+    assert stopped.value.code == 128 + signal.SIGTERM
+    assert signal.getsignal(signal.SIGTERM) == before  # the handler given back
