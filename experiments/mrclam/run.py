@@ -42,7 +42,7 @@ def plot_aligned(log: Path, out: Path, path: Path, title: str) -> Path:
     from mazeslam.core.motion import dead_reckoning
     from mazeslam.data.loaded_run import load_run
     from mazeslam.evaluation.metrics import absolute_trajectory_error, align_se2, apply_se2
-    from mazeslam.viz.plots import draw_ellipses, save_figure
+    from mazeslam.viz.plots import draw_ellipses, mark_end, mark_start, save_figure
 
     run = load_run(log)
     assert run.truth is not None
@@ -70,6 +70,8 @@ def plot_aligned(log: Path, out: Path, path: Path, title: str) -> Path:
         linewidth=1.0,
         label=f"FastSLAM mean path, aligned (ATE {fastslam_ate:.2f} m)",
     )
+    mark_start(ax, run.truth, "black")  # of the true path (black: the green circles are landmarks)
+    mark_end(ax, run.truth, "black")
     if run.true_corners is not None:
         ax.plot(*run.true_corners.T, "o", color="tab:green", markerfacecolor="none", label="surveyed landmarks")
     if len(landmarks):
