@@ -10,6 +10,8 @@ import numpy as np
 import pandas as pd
 
 from mazeslam.core.config import InputError
+from mazeslam.core.outputs import write_file
+from mazeslam.core.outputs import written as written_whole
 from mazeslam.sweeps.runner import MAPS, summarise
 from mazeslam.viz.backends import file_figure
 from mazeslam.viz.plots import draw_walls
@@ -139,7 +141,7 @@ def make_report(out_dir: str | Path) -> list[Path]:
     table = in_millimetres(pd.read_csv(out_dir / "results.csv"))
     keys = list(meta["grid"])
     written = [out_dir / "summary.md"]
-    written[0].write_text(summary_table(table, keys))
+    write_file(written[0], summary_table(table, keys))
     for key in keys:
         written.append(_plot_against(table, key, [k for k in keys if k != key], out_dir, meta.get("name", "")))
     maps = _maps_side_by_side(table, keys, out_dir, name=meta.get("name", ""))
@@ -285,7 +287,8 @@ def _plot_against(table: pd.DataFrame, key: str, others: list[str], out_dir: Pat
     )
     fig.legend(handles, labels, loc="outside lower center", ncol=min(len(labels), 5), fontsize=8)
     path = out_dir / f"plot_{short_name(key)}.png"
-    fig.savefig(path, dpi=100)
+    with written_whole(path) as temporary:
+        fig.savefig(temporary, dpi=100)
     return path
 
 
@@ -333,5 +336,6 @@ def _maps_side_by_side(
         fontsize=10,
     )
     path = out_dir / "maps.png"
-    fig.savefig(path, dpi=110)
+    with written_whole(path) as temporary:
+        fig.savefig(temporary, dpi=110)
     return path

@@ -58,6 +58,7 @@ from tqdm.auto import tqdm
 
 from mazeslam.core.config import ConfigError, InputError, check_setting, jsonable, read_text, with_settings
 from mazeslam.core.limits import MAX_SEED, duration_problem
+from mazeslam.core.outputs import write_file, written
 from mazeslam.data.loaded_run import load_run
 from mazeslam.evaluation.metrics import apply_se2
 from mazeslam.evaluation.scoring import DEAD_RECKONING, score_run
@@ -354,12 +355,8 @@ def execute_run(sweep: Sweep, run: dict, maps_folder: str | None = None, logs_fo
             "trajectory": apply_se2(score.alignment, result.mean_poses)[:, :2].round(5).tolist(),
             "truth": truth[:, :2].round(5).tolist(),
         }
-        # Written beside and renamed: a worker killed mid-write leaves no torn map (and the same
-        # partial file is overwritten when the run runs again).
-        path = Path(maps_folder, f"{row['run_id']}.json")
-        partial = path.with_name(f".{path.name}.partial")
-        partial.write_text(json.dumps(document, allow_nan=False))
-        os.replace(partial, path)
+        # Written beside and renamed (write_file): a worker killed mid-write leaves no torn map.
+        write_file(Path(maps_folder, f"{row['run_id']}.json"), json.dumps(document, allow_nan=False))
     return row
 
 
@@ -417,13 +414,14 @@ def run_sweep(
     out_dir = Path(out_dir)
     (out_dir / MAPS).mkdir(parents=True, exist_ok=True)
     with SweepLock(out_dir):
-        (out_dir / "sweep.json").write_text(
+        write_file(
+            out_dir / "sweep.json",
             json.dumps(
                 jsonable({"name": sweep.name, "source": sweep.source, "grid": sweep.grid, "seeds": sweep.seeds}),
                 indent=1,
                 allow_nan=False,
             )
-            + "\n"
+            + "\n",
         )
         skipped: list[str] = []
         done = finished_runs(out_dir, skipped)
@@ -636,9 +634,11 @@ def summarise(table: pd.DataFrame, grid_keys: list[str], metrics: list[str] = ME
 def write_tables(table: pd.DataFrame, grid_keys: list[str], out_dir: Path) -> dict[str, Path]:
     """``results.csv`` and ``results.parquet`` (one row per run) and ``summary.md`` (mean +- 95 % CI per cell)."""
     paths = {"csv": out_dir / "results.csv", "parquet": out_dir / "results.parquet", "summary": out_dir / "summary.md"}
-    table.to_csv(paths["csv"], index=False)
-    table.to_parquet(paths["parquet"], index=False)
-    paths["summary"].write_text(summary_markdown(table, grid_keys))
+    with written(paths["csv"]) as temporary:  # each whole or not at all, an error naming it (a full disk)
+        table.to_csv(temporary, index=False)
+    with written(paths["parquet"]) as temporary:
+        table.to_parquet(temporary, index=False)
+    write_file(paths["summary"], summary_markdown(table, grid_keys))
     return paths
 
 
