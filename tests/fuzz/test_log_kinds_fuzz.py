@@ -11,9 +11,9 @@ Cases: 4 kinds x 3 seeds x 8 configs (7 files and the defaults) x 2 map kinds x 
 = 384 through the API; 4 kinds x 2 configs (the defaults, the kind's own) x 2 map kinds = 16
 through the command line; 400 in all.
 
-The fuzz suite of tests/fuzz/ (issue 36), 2105 cases: this module's 400; edge-sized and drawn logs
+The fuzz suite of tests/fuzz/ (issue 36), 2106 cases: this module's 400; edge-sized and drawn logs
 976 (test_edge_logs_fuzz.py); Gymnasium actions, seeds and reset options 707
-(test_env_actions_fuzz.py); interrupts 6 (test_interrupts_fuzz.py); a full disk 10
+(test_env_actions_fuzz.py); interrupts 6 (test_interrupts_fuzz.py); a full disk 11
 (test_full_disk_fuzz.py); the reproducers of what it found 6 (test_found_by_fuzz.py).
 """
 
