@@ -33,6 +33,7 @@ from multiprocessing.connection import Connection
 from multiprocessing.reduction import ForkingPickler
 from typing import Any
 
+from mazeslam.core.outputs import stop_outputs
 from mazeslam.sweeps.pool import end_with_parent
 
 
@@ -223,6 +224,7 @@ class _Stop:
             signal.raise_signal(signum)
             return
         self.signum = signum
+        stop_outputs(Interrupted(signum))  # no result replaces the last run's, even if this one is swallowed
         timer = threading.Timer(INSIST_SECONDS, self.insist)
         timer.daemon = True
         timer.start()
@@ -263,5 +265,6 @@ def stop_on_signals(signals: Sequence[int] = (signal.SIGTERM, signal.SIGINT)) ->
             raise Interrupted(stop.signum)
     finally:
         stop.left = True
+        stop_outputs(None)
         for signum, handler in previous.items():
             signal.signal(signum, handler)

@@ -75,6 +75,24 @@ def prepare_output_file(path: str | Path) -> Path:
     return path
 
 
+#: The exception a stop of the command raises (``stop_outputs``), or nothing: while it is set no
+#: output replaces a file, the stop is raised at the commit instead (a stop can be swallowed on its
+#: way up by library code that catches everything; the run must not then report results).
+_STOPPED: list[BaseException] = []
+
+
+def stop_outputs(reason: BaseException | None) -> None:
+    """From now on (``reason``: the exception to raise) or no longer (None), no output this module
+    writes replaces a file: ``reason`` is raised where it would (``written``, ``staged_outputs``)."""
+    _STOPPED[:] = [] if reason is None else [reason]
+
+
+def _refuse_if_stopped() -> None:
+    """Raise the stop ``stop_outputs`` set, if any."""
+    if _STOPPED:
+        raise _STOPPED[0]
+
+
 @contextlib.contextmanager
 def written(path: str | Path) -> Iterator[Path]:
     """Write ``path`` whole or not at all: the block writes the temporary path it is given (beside
@@ -85,6 +103,7 @@ def written(path: str | Path) -> Iterator[Path]:
     temporary = path.with_name(f".{path.stem}-{os.getpid()}-{secrets.token_hex(4)}.tmp{path.suffix}")
     try:
         yield temporary
+        _refuse_if_stopped()
         os.replace(temporary, path)
     except OSError as error:
         raise WriteError(path, error.strerror or str(error)) from error
@@ -175,6 +194,7 @@ def staged_outputs(folder: str | Path, patterns: tuple[str, ...]) -> Iterator[Pa
             if not error.path.is_relative_to(staging):
                 raise
             raise WriteError(folder / error.path.relative_to(staging), error.reason) from error
+        _refuse_if_stopped()
         with _locked(folder), _signals_deferred():
             new = [path for path in staging.iterdir() if path.is_file()]
             for path in new:

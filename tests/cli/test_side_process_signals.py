@@ -165,3 +165,22 @@ def test_a_stop_swallowed_by_library_code_still_ends_in_interrupted(ending):
             raise SystemExit(0)
     assert stopped.value.code == 128 + signal.SIGTERM
     assert signal.getsignal(signal.SIGTERM) == before  # the handler given back
+
+
+def test_after_a_swallowed_stop_no_output_replaces_a_file(tmp_path):
+    """The run that went on after its stop was swallowed must not then replace the last results."""
+    from mazeslam.cli.side_process import Interrupted, stop_on_signals
+    from mazeslam.core.outputs import staged_outputs, write_file
+
+    (tmp_path / "result.txt").write_text("the last run's\n")
+    with pytest.raises(Interrupted), stop_on_signals():
+        try:
+            signal.raise_signal(signal.SIGTERM)
+        except BaseException:  # swallowed
+            pass
+        with staged_outputs(tmp_path, ("*.txt",)) as staging:
+            write_file(staging / "result.txt", "this run's\n")
+    assert (tmp_path / "result.txt").read_text() == "the last run's\n"
+    assert sorted(path.name for path in tmp_path.iterdir()) == ["result.txt"]  # no staging folder left
+    write_file(tmp_path / "result.txt", "after the command\n")  # outside the block, writes work again
+    assert (tmp_path / "result.txt").read_text() == "after the command\n"
