@@ -55,7 +55,7 @@ OCTAVE_SECONDS, OCTAVE_RECORDS = 90.0, 133
 COURSE_LOG = Path(__file__).resolve().parents[2] / "shared" / "data" / "course" / "log1.txt"
 
 
-def _children_cpu() -> float:
+def children_cpu() -> float:
     """User + system seconds of this process's finished (waited-for) children and their children."""
     usage = resource.getrusage(resource.RUSAGE_CHILDREN)
     return usage.ru_utime + usage.ru_stime
@@ -67,10 +67,10 @@ def time_command(log_path: Path, out_dir: Path, repeats: int = REPEATS) -> dict:
     command = [sys.executable, "-m", "mazeslam.cli", "slam", str(log_path), "--particles", str(PARTICLES)]
     walls, cpus = [], []
     for _ in range(repeats):
-        cpu, began = _children_cpu(), time.perf_counter()
+        cpu, began = children_cpu(), time.perf_counter()
         subprocess.run([*command, "--out", str(out_dir), "--quiet"], check=True, capture_output=True)
         walls.append(time.perf_counter() - began)
-        cpus.append(_children_cpu() - cpu)
+        cpus.append(children_cpu() - cpu)
     return {"wall": walls, "cpu": cpus}
 
 

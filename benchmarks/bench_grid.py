@@ -26,7 +26,6 @@ from __future__ import annotations
 import dataclasses
 import json
 import os
-import resource
 import subprocess
 import sys
 import tempfile
@@ -39,6 +38,7 @@ import pandas as pd
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests" / "gridslam"))
 
+from bench_command import children_cpu  # noqa: E402  (CPU of finished child processes)
 from reference_grid_filter import ReferenceGridSlam  # noqa: E402
 
 from mazeslam.core.config import with_settings  # noqa: E402
@@ -116,14 +116,9 @@ def ratio_rows(name: str, run: LoadedRun, config: SlamConfig) -> Iterator[dict]:
     }
 
 
-def _children_cpu() -> float:
-    usage = resource.getrusage(resource.RUSAGE_CHILDREN)
-    return usage.ru_utime + usage.ru_stime
-
-
 def command_cpu(log: Path, folder: Path, environment: dict | None = None) -> float:
     """CPU seconds of ``mazeslam slam LOG --config configs/course.toml`` in a fresh interpreter."""
-    before = _children_cpu()
+    before = children_cpu()
     subprocess.run(
         [sys.executable, "-m", "mazeslam.cli", "slam", str(log), "--config", str(CONFIGS / "course.toml")]
         + ["--out", str(folder / "command")],
@@ -131,7 +126,7 @@ def command_cpu(log: Path, folder: Path, environment: dict | None = None) -> flo
         capture_output=True,
         env={**os.environ, **(environment or {})},
     )
-    return _children_cpu() - before
+    return children_cpu() - before
 
 
 def filter_cpu(run: LoadedRun, particles: int) -> float:

@@ -405,17 +405,17 @@ class GridSlam:
         """The new poses (P, 3), drawn with the standard normals ``normals`` (P, 3): from its
         proposal for a particle whose match was accepted (``accepted`` (P,)), else by the motion
         model (``_unmatched_covariance``)."""
-        means, covariances, centres = np.zeros((len(proposals), 3)), np.empty((len(proposals), 3, 3)), self.poses
+        count = len(proposals)
+        means, covariances, centres = np.zeros((count, 3)), np.empty((count, 3, 3)), np.zeros((count, 3))
         for index, proposal in enumerate(proposals):
             if accepted[index]:
-                means[index], covariances[index] = proposal.mean, proposal.covariance
+                means[index], covariances[index], centres[index] = proposal.mean, proposal.covariance, proposal.centre
             else:
                 covariances[index] = self._unmatched_covariance(index, motion, covariance)
         noise = gaussian(means, covariances, normals)
-        moved = compose(centres, motion + noise)  # where the match failed: the motion model
-        centres = np.array([proposal.centre if ok else np.zeros(3) for proposal, ok in zip(proposals, accepted)])
         drawn = centres + noise
         drawn[:, 2] = wrap_angle(drawn[:, 2])
+        moved = compose(self.poses, motion + noise)  # where the match failed: the motion model
         return np.where(accepted[:, None], drawn, moved)
 
     def _unmatched_covariance(self, index: int, motion: np.ndarray, covariance: np.ndarray) -> np.ndarray:
