@@ -76,10 +76,9 @@ def write_outputs(out_dir, result: SlamResult, extra: dict) -> dict[str, Path]:
     }
     if result.grid is not None:
         from mazeslam.data.map_io import write_map
-        from mazeslam.gridslam.occupancy import grid_states
 
-        assert result.grid_run is not None
-        paths["occupancy"] = write_map(grid_states(result.grid), out_dir)
+        assert result.grid_run is not None and result.occupancy is not None
+        paths["occupancy"] = write_map(result.occupancy, out_dir)
         document.update(
             occupancy=paths["occupancy"].name,
             seconds_total=result.grid_run.total_seconds,

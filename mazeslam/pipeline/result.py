@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from functools import cached_property
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -11,6 +12,7 @@ from mazeslam.evaluation.consistency import OBSERVATION_BOUND_95, POSE_BOUND_95,
 from mazeslam.pipeline.config import MapKind
 
 if TYPE_CHECKING:
+    from mazeslam.data.map_io import OccupancyMap
     from mazeslam.fastslam.filter import UpdateReport
     from mazeslam.gridslam.filter import GridSlamResult
     from mazeslam.gridslam.occupancy import TiledGrid
@@ -76,6 +78,16 @@ class SlamResult:
     dropped_odometry: list = field(default_factory=list)
     laser_odometry: LaserOdometry | None = None
     grid_run: GridSlamResult | None = None
+
+    @cached_property
+    def occupancy(self) -> OccupancyMap | None:
+        """The cell states of ``grid`` (``grid_states``: occupied, free, unknown), None without a
+        grid; worked out once for the files and figures that show it."""
+        if self.grid is None:
+            return None
+        from mazeslam.gridslam.occupancy import grid_states
+
+        return grid_states(self.grid)
 
     @property
     def filter_name(self) -> str:

@@ -81,10 +81,10 @@ def write_run(
         paths["truth_tum"] = out_dir / "truth.tum"
         sidecars.write_tum(paths["truth_tum"], run.log.times, run.truth)
     if result.grid is not None:
-        from mazeslam.gridslam.occupancy import grid_states
         from mazeslam.viz.grid_figure import plot_grid_run, plot_occupancy
 
-        occupancy = grid_states(result.grid)
+        occupancy = result.occupancy
+        assert occupancy is not None
         paths["occupancy_figure"] = plot_occupancy(out_dir / "occupancy.png", occupancy, figure_title(run, config))
         paths["figure"] = plot_grid_run(
             out_dir / "slam.png",
