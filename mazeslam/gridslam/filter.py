@@ -266,14 +266,12 @@ class Proposal:
 def _bounds(starts: np.ndarray, points: np.ndarray, with_starts: bool = False) -> np.ndarray:
     """Per particle, the box (P, 2, 2) (lower and upper corner, world, m) of ``points`` (N, 2)
     (robot frame) placed at each of its ``starts`` (P, K, 3), and of the starts' own positions with
-    ``with_starts``."""
-    cos_t, sin_t = np.cos(starts[..., 2:3]), np.sin(starts[..., 2:3])  # (P, K, 1)
-    x = starts[..., :1] + cos_t * points[:, 0] - sin_t * points[:, 1]  # (P, K, N)
-    y = starts[..., 1:2] + sin_t * points[:, 0] + cos_t * points[:, 1]
-    placed = np.stack([x, y], axis=-1).reshape(len(starts), -1, 2)
-    if with_starts:
-        placed = np.concatenate([placed, starts[..., :2]], axis=1)
-    return np.stack([placed.min(axis=1), placed.max(axis=1)], axis=1)
+    ``with_starts`` (``mazeslam.gridslam.kernels.bounds``)."""
+    from mazeslam.gridslam import kernels  # here, not at the top: numba loads only where the grid filter runs
+
+    return kernels.bounds(
+        np.ascontiguousarray(starts, dtype=float), np.ascontiguousarray(points, dtype=float), with_starts
+    )
 
 
 @dataclass(frozen=True)

@@ -11,6 +11,7 @@ occupied where its log-odds exceed ``threshold``.
 
 The kernels, in the order a scan uses them:
 
+0. ``bounds``: the box each particle's scan covers, for the map windows to read.
 1. ``any_occupied``: whether the window has an occupied cell to match against at all.
 2. ``lookup``: the distance (m) at world points, bilinear between the four nearest cell centres,
    and its gradient (the likelihood field). A cell's distance is the exact Euclidean distance from
@@ -43,6 +44,29 @@ from numba import njit
 BLOCK = 8
 #: Rings of single cells searched around a cell before the search turns to blocks.
 NEAR_RINGS = 4
+
+
+@njit(cache=True)
+def bounds(starts, points, with_starts):
+    """Per particle, the box (P, 2, 2) (lower and upper corner, world, m) of ``points`` (N, 2)
+    (robot frame) placed at each of its ``starts`` (P, K, 3), and of the starts' own positions with
+    ``with_starts``."""
+    count = starts.shape[0]
+    boxes = np.empty((count, 2, 2))
+    for p in range(count):
+        low_x = low_y = math.inf
+        high_x = high_y = -math.inf
+        for k in range(starts.shape[1]):
+            x0, y0 = starts[p, k, 0], starts[p, k, 1]
+            cos_t, sin_t = math.cos(starts[p, k, 2]), math.sin(starts[p, k, 2])
+            if with_starts:
+                low_x, high_x, low_y, high_y = min(low_x, x0), max(high_x, x0), min(low_y, y0), max(high_y, y0)
+            for n in range(points.shape[0]):
+                x = x0 + cos_t * points[n, 0] - sin_t * points[n, 1]
+                y = y0 + sin_t * points[n, 0] + cos_t * points[n, 1]
+                low_x, high_x, low_y, high_y = min(low_x, x), max(high_x, x), min(low_y, y), max(high_y, y)
+        boxes[p, 0, 0], boxes[p, 0, 1], boxes[p, 1, 0], boxes[p, 1, 1] = low_x, low_y, high_x, high_y
+    return boxes
 
 
 @njit(cache=True)

@@ -10,6 +10,7 @@ from reference_grid_filter import ReferenceField, ReferenceGridSlam
 from reference_grid_filter import integrate_scan as reference_integrate_scan
 from reference_grid_filter import refine_pose as reference_refine_pose
 
+from mazeslam.core.geometry import compose
 from mazeslam.data.log import read
 from mazeslam.gridslam import GridSlamParams, filter, run_grid_slam
 from mazeslam.gridslam.filter import SearchMode
@@ -133,3 +134,17 @@ def test_the_precompile_room_is_measured_to_its_walls():
     course_log, geometry = room_log(scans=3)
     assert list(course_log.flags) == [0, 1, 0, 1, 0, 1] and course_log.width == len(geometry.bearings(course_log.width))
     assert np.all(course_log.values[1::2] <= np.hypot(*(ROOM[1] - ROOM[0])))
+
+
+def test_each_particles_box_holds_its_placed_points_and_touches_them():
+    rng = np.random.default_rng(4)
+    starts = np.concatenate([rng.uniform(-5, 5, (7, 3, 2)), rng.uniform(-np.pi, np.pi, (7, 3, 1))], axis=2)
+    points = rng.uniform(-8, 8, (40, 2))
+    for with_starts in (False, True):
+        boxes = filter._bounds(starts, points, with_starts)
+        for particle, box in enumerate(boxes):
+            placed = [
+                compose(start, np.column_stack([points, np.zeros(len(points))]))[:, :2] for start in starts[particle]
+            ]
+            placed = np.vstack(placed + ([starts[particle, :, :2]] if with_starts else []))
+            np.testing.assert_allclose(box, [placed.min(axis=0), placed.max(axis=0)], rtol=0, atol=1e-12)
