@@ -187,7 +187,7 @@ def run_slam_command(
     scores the run and writes the rest (the command line's way; otherwise they are made here).
     Without ``config_path``, the config that fits the log's kind runs (``chosen_config``); the line
     saying which goes to ``say`` at once when given, else to the lines."""
-    config, chosen = _settings(log_file, config_path, say)
+    config, chosen = chosen_settings(log_file, config_path, say)
     filter_changes = filter_changes or {}
     changes = {"map.kind": map_kind, **{f"fastslam.{name}": value for name, value in filter_changes.items()}}
     changes.update({"grid.particles": filter_changes.get("NPARTICLES"), "grid.seed": filter_changes.get("seed")})
@@ -212,7 +212,7 @@ def run_slam_command(
     return [*lines, "wrote " + ", ".join(str(Path(out_dir) / path.name) for path in paths.values())]
 
 
-def _settings(log_file, config_path, say) -> tuple[SlamConfig, str | None]:
+def chosen_settings(log_file, config_path, say=None) -> tuple[SlamConfig, str | None]:
     """The settings of a run: the config file given, else the one that fits the log's kind
     (``chosen_config``) with the line that says which, sent to ``say`` at once when there is one
     (then None comes back), else returned to go with the run's lines."""

@@ -600,19 +600,30 @@ class GridSlamResult:
 
     def record_trajectory(self, which: str = "best") -> tuple[np.ndarray, np.ndarray]:
         """Poses (R, 3) and covariances (R, 3, 3) at every record of the log, as
-        ``sidecars.write_trajectory`` takes them: a record gets the pose of the last scan at or
-        before it moved on by the odometry since (the start pose moved so before the first scan, with
-        zero covariance), the covariance of that scan. ``which``: "best" or "mean"."""
+        ``sidecars.write_trajectory`` takes them (``carried_to_records``). ``which``: "best" or "mean"."""
         scan_poses = {"best": self.best_poses, "mean": self.mean_poses}[which]
-        latest = np.searchsorted(self.scan_records, np.arange(len(self.reckoned)), side="right") - 1
-        scanned = latest[:, None] >= 0
-        anchor = np.where(scanned, scan_poses[np.maximum(latest, 0)], self.reckoned_start)
-        reckoned_anchor = np.where(
-            scanned, self.reckoned[self.scan_records[np.maximum(latest, 0)]], self.reckoned_start
-        )
-        poses = compose(anchor, relative(reckoned_anchor, self.reckoned))
-        covariances = np.where(latest[:, None, None] >= 0, self.covariances[np.maximum(latest, 0)], 0.0)
-        return poses, covariances
+        return carried_to_records(self.scan_records, scan_poses, self.covariances, self.reckoned, self.reckoned_start)
+
+
+def carried_to_records(
+    scan_records: np.ndarray,
+    scan_poses: np.ndarray,
+    scan_covariances: np.ndarray,
+    reckoned: np.ndarray,
+    reckoned_start: np.ndarray,
+) -> tuple[np.ndarray, np.ndarray]:
+    """Poses (R, 3) and covariances (R, 3, 3) at every record from the poses (S, 3) and covariances
+    (S, 3, 3) at the scans, records ``scan_records`` (S,): a record gets the pose of the last scan at or
+    before it moved on by the odometry since, ``reckoned`` (R, 3) (the odometry at every record's time,
+    from ``reckoned_start`` (3,); the start pose moved so before the first scan, with zero
+    covariance), and the covariance of that scan. World frame, m and rad."""
+    latest = np.searchsorted(scan_records, np.arange(len(reckoned)), side="right") - 1
+    scanned = latest[:, None] >= 0
+    anchor = np.where(scanned, scan_poses[np.maximum(latest, 0)], reckoned_start)
+    reckoned_anchor = np.where(scanned, reckoned[scan_records[np.maximum(latest, 0)]], reckoned_start)
+    poses = compose(anchor, relative(reckoned_anchor, reckoned))
+    covariances = np.where(latest[:, None, None] >= 0, scan_covariances[np.maximum(latest, 0)], 0.0)
+    return poses, covariances
 
 
 def odometry_at_record_times(course_log: CourseLog, start_pose) -> np.ndarray:
