@@ -24,12 +24,12 @@ from mazeslam.core.config import with_settings
 from mazeslam.core.outputs import staged_outputs
 from mazeslam.data.beam_detection import convention_given, convention_warning, with_detected_convention
 from mazeslam.data.loaded_run import LoadedRun, load_run
-from mazeslam.evaluation.consistency import EXPLANATION, MOTION_EXPLANATION, POSE_BOUND_95, summarise
+from mazeslam.evaluation.consistency import EXPLANATION, MOTION_EXPLANATION, POSE_BOUND_95, summarise, summary_words
 from mazeslam.evaluation.scoring import RPE_DISTANCE, score_run
 from mazeslam.evaluation.sharpness import paths_sharpness, sharpness_lines
 from mazeslam.gridslam.filter import SearchMode
-from mazeslam.pipeline import MapKind, SlamConfig, SlamResult, load_slam_config, run_slam
-from mazeslam.pipeline.log_kinds import chosen_config
+from mazeslam.pipeline import MapKind, SlamConfig, SlamResult, run_slam
+from mazeslam.pipeline.log_kinds import settings_for
 from mazeslam.pipeline.outputs import consistency
 from mazeslam.viz.run_files import figure_title, landmark_figure_call, trusted_span, write_run
 
@@ -185,9 +185,12 @@ def run_slam_command(
     ``side_process``: corner FastSLAM's ``slam.png`` and map export are made by a ``SideProcess``
     forked before the filter runs, which loads matplotlib meanwhile and draws while this process
     scores the run and writes the rest (the command line's way; otherwise they are made here).
-    Without ``config_path``, the config that fits the log's kind runs (``chosen_config``); the line
+    Without ``config_path``, the config that fits the log's kind runs (``settings_for``); the line
     saying which goes to ``say`` at once when given, else to the lines."""
-    config, chosen = chosen_settings(log_file, config_path, say)
+    config, chosen = settings_for(log_file, config_path)
+    if say is not None and chosen is not None:
+        say(chosen)
+        chosen = None
     filter_changes = filter_changes or {}
     changes = {"map.kind": map_kind, **{f"fastslam.{name}": value for name, value in filter_changes.items()}}
     changes.update({"grid.particles": filter_changes.get("NPARTICLES"), "grid.seed": filter_changes.get("seed")})
@@ -210,19 +213,6 @@ def run_slam_command(
         live_speed = speed if live else None
         lines, paths = _run_and_write(log_file, run, config, staging, notes, animate, progress, live_speed, echo, side)
     return [*lines, "wrote " + ", ".join(str(Path(out_dir) / path.name) for path in paths.values())]
-
-
-def chosen_settings(log_file, config_path, say=None) -> tuple[SlamConfig, str | None]:
-    """The settings of a run: the config file given, else the one that fits the log's kind
-    (``chosen_config``) with the line that says which, sent to ``say`` at once when there is one
-    (then None comes back), else returned to go with the run's lines."""
-    if config_path is not None:
-        return load_slam_config(config_path), None
-    choice = chosen_config(log_file)
-    if say is not None:
-        say(choice.line)
-        return choice.config, None
-    return choice.config, choice.line
 
 
 def _run_and_write(
@@ -390,14 +380,6 @@ def _uncertainty_lines(result: SlamResult, nis: dict, nees: dict | None, nis_by_
     kind of observation when there are several kinds: which part of the observation model is off;
     the grid filter's scan-match corrections of the motion), NEES with truth, and what they mean."""
 
-    def described(summary: dict, bound: float, consistent: int) -> str:
-        if not summary["count"]:
-            return "undefined"
-        return (
-            f"mean {summary['mean']:.2f}, median {summary['median']:.2f}, {100 * summary['inside_95']:.0f} % "
-            f"inside the 95 % bound {bound:.2f} (consistent: {consistent})"
-        )
-
     if result.grid is not None:
         what = f"motion NIS of {nis['count']} matched scans"
         hint = (
@@ -406,9 +388,9 @@ def _uncertainty_lines(result: SlamResult, nis: dict, nees: dict | None, nis_by_
         )
     else:
         what, hint = f"NIS of {nis['count']} associated observations", None
-    line = f"Uncertainty: {what} {described(nis, result.nis_bound, result.nis_dof)}"
+    line = f"Uncertainty: {what} {summary_words(nis, result.nis_bound, result.nis_dof)}"
     if nees is not None:
-        line += f"; pose NEES {described(nees, POSE_BOUND_95, 3)}"
+        line += f"; pose NEES {summary_words(nees, POSE_BOUND_95, 3)}"
     lines = [line]
     if hint:
         lines.append(hint)

@@ -56,6 +56,17 @@ def summarise(values: np.ndarray, bound: float) -> dict[str, float | int | None]
     }
 
 
+def summary_words(summary: dict, bound: float, consistent: int) -> str:
+    """A ``summarise`` result in words: "mean .., median .., ..% inside the 95 % bound .. (consistent:
+    ``consistent``)", or "undefined" without values."""
+    if not summary["count"]:
+        return "undefined"
+    return (
+        f"mean {summary['mean']:.2f}, median {summary['median']:.2f}, {100 * summary['inside_95']:.0f} % "
+        f"inside the 95 % bound {bound:.2f} (consistent: {consistent})"
+    )
+
+
 def nees_summary(nees: np.ndarray) -> dict:
     """``summarise`` of per-record pose NEES (3 degrees of freedom)."""
     return summarise(nees, POSE_BOUND_95)

@@ -24,6 +24,8 @@ COURSE_ROBOT_BEAMS = 360
 COURSE_ROBOT_MAX_RANGE = 2.0  # m
 #: The map sidecar's ``source`` of a real-robot recording (``mazeslam.robot.recorder``).
 REAL_ROBOT_SOURCE = "mazeslam record (real robot"
+#: The map sidecar's ``source`` of a simulated building (``mazeslam.sim.building``).
+BUILDING_SOURCE = "mazeslam.sim.building"
 
 
 class LogKind(enum.Enum):
@@ -31,6 +33,7 @@ class LogKind(enum.Enum):
 
     MAZE_SIMULATION = "a simulated maze (its sidecar's laser is the default one)"
     COURSE_SIMULATION = "a simulated course robot (its sidecar's laser is the omnidirectional camera)"
+    BUILDING_SIMULATION = "a simulated building of corridors and a SICK-like laser (mazeslam.sim.building)"
     COURSE_ROBOT = "the exercise robot's own log (no sidecar; 360 camera ranges of at most 2 m)"
     REAL_ROBOT = "a recording of the real e-puck (`mazeslam record`)"
     CARMEN = "a CARMEN log imported by `mazeslam import carmen`"
@@ -44,6 +47,7 @@ class LogKind(enum.Enum):
 SETTINGS: dict[LogKind, str | None] = {
     LogKind.MAZE_SIMULATION: None,
     LogKind.COURSE_SIMULATION: "course.toml",
+    LogKind.BUILDING_SIMULATION: "carmen.toml",
     LogKind.COURSE_ROBOT: "course.toml",
     LogKind.REAL_ROBOT: "course.toml",
     LogKind.CARMEN: "carmen.toml",
@@ -65,6 +69,8 @@ def log_kind(run: LoadedRun) -> LogKind:
         return LogKind.MRCLAM
     if isinstance(source, str) and source.startswith(REAL_ROBOT_SOURCE):
         return LogKind.REAL_ROBOT
+    if isinstance(source, str) and source.startswith(BUILDING_SOURCE):
+        return LogKind.BUILDING_SIMULATION
     if (run.world.get("sensor") or {}).get("model") == "omnicam":
         return LogKind.COURSE_SIMULATION
     if len(run.world["walls"]) and run.log.is_scan.any():
@@ -113,3 +119,12 @@ def chosen_config(path: str | Path, folder: Path = CONFIGS_FOLDER) -> ConfigChoi
         )
     line = f"settings: configs/{name}, as {run.path.name} is {kind.value}; --config overrides"
     return ConfigChoice(kind, name, load_slam_config(file), line)
+
+
+def settings_for(path: str | Path, config_path: str | Path | None) -> tuple[SlamConfig, str | None]:
+    """The settings of a run on the log ``path``: the config file ``config_path`` when given (and no
+    line), else the one that fits the log's kind (``chosen_config``) and the line that says which."""
+    if config_path is not None:
+        return load_slam_config(config_path), None
+    choice = chosen_config(path)
+    return choice.config, choice.line

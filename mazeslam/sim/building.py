@@ -15,6 +15,7 @@ import numpy as np
 
 from mazeslam.core.beams import BeamGeometry
 from mazeslam.core.geometry import advance_pose, wrap_angle
+from mazeslam.data import sidecars
 from mazeslam.data.log import LogWriter
 from mazeslam.sim.laser import LaserParams, VirtualLaser
 
@@ -67,7 +68,8 @@ def simulate_building_log(
     heading_bias: float = 0.02,
     seed: int = 0,
 ) -> SimulatedLog:
-    """Drive ``laps`` times round the corridor ring of ``building_walls`` and write the log.
+    """Drive ``laps`` times round the corridor ring of ``building_walls`` and write the log, with its
+    truth and map sidecars (the true pose at every record; the walls, the laser, the start pose).
 
     Odometry records come every ``step`` metres (or radians, turning in place at the corners): the
     true increment with 2 % distance noise and a heading error of ``heading_bias`` rad per metre
@@ -78,7 +80,7 @@ def simulate_building_log(
     laser = VirtualLaser(LASER, walls)
     start = np.array([1.0, 1.0, 0.0])
     moves = _centre_line_moves(walls, laps, step)
-    truth, pose, time = [], start, 0.0
+    truth, times, pose, time = [], [], start, 0.0
     with LogWriter(path, LASER.beams) as writer:
         for index, (distance, turn) in enumerate(moves):
             pose = advance_pose(pose, distance, turn)
@@ -86,9 +88,20 @@ def simulate_building_log(
             measured = distance * (1 + 0.02 * rng.standard_normal())
             writer.write_odometry(time, measured, turn + heading_bias * abs(distance) + 0.002 * rng.standard_normal())
             truth.append(pose)
+            times.append(time)
             if (index + 1) % scan_every == 0:
                 writer.write_scan(time, laser.scan(pose, rng))
                 truth.append(pose)
+                times.append(time)
+    sidecars.write_truth(sidecars.truth_path(path), np.array(times), np.array(truth))
+    sidecars.write_map(
+        sidecars.map_path(path),
+        walls,
+        np.empty((0, 2)),
+        LASER.sensor_mapping(),
+        start_pose=start.tolist(),
+        source="mazeslam.sim.building",  # what pipeline.log_kinds tells it by
+    )
     return SimulatedLog(Path(path), np.array(truth), start, LASER.geometry)
 
 

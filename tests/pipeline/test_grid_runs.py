@@ -21,15 +21,7 @@ from mazeslam.sim.building import simulate_building_log
 @pytest.fixture(scope="module")
 def building(tmp_path_factory):
     folder = tmp_path_factory.mktemp("building")
-    simulated = simulate_building_log(folder / "building.log")
-    sidecars.write_truth(sidecars.truth_path(simulated.path), log.read(simulated.path).times, simulated.truth)
-    sidecars.write_map(
-        sidecars.map_path(simulated.path),
-        np.empty((0, 4)),
-        np.empty((0, 2)),
-        simulated.geometry.to_dict(),
-        start_pose=simulated.start_pose.tolist(),
-    )
+    simulated = simulate_building_log(folder / "building.log")  # with its truth and map sidecars
     config = folder / "grid.toml"
     config.write_text('[map]\nkind = "grid"\n\n[grid]\nparticles = 8\nmotion = "wheels"\n')
     return simulated, config

@@ -19,6 +19,7 @@ from mazeslam.data.mrclam import import_mrclam
 from mazeslam.pipeline import MapKind, SlamConfig, load_slam_config, slam_on_file
 from mazeslam.pipeline.log_kinds import CONFIGS_FOLDER, LogKind, chosen_config, log_kind
 from mazeslam.pipeline.run import NumericalFailure, numbers_checked
+from mazeslam.sim.building import simulate_building_log
 from mazeslam.sim.laser import cast_rays
 from mazeslam.sim.simulator import SimulationConfig
 
@@ -114,6 +115,12 @@ def test_a_real_robot_recording_takes_the_course_robot_settings(tmp_path):
         writer.write_scan(0.0, np.full(180, 0.2))
     sidecars.write_map(sidecars.map_path(path), [], [], {"beams": 180}, source="mazeslam record (real robot: no truth)")
     assert log_kind(load_run(path)) is LogKind.REAL_ROBOT and chosen_config(path).file == "course.toml"
+
+
+def test_a_simulated_building_takes_the_laser_settings(tmp_path):
+    simulated = simulate_building_log(tmp_path / "building.log", laps=0.2)
+    choice = chosen_config(simulated.path)
+    assert choice.kind is LogKind.BUILDING_SIMULATION and choice.file == "carmen.toml"
 
 
 def test_a_log_of_no_known_kind_runs_the_defaults_and_names_the_other_configs(default_run, tmp_path):
