@@ -35,7 +35,7 @@ SLAM_FILES = (
     "landmarks.csv",
 )
 #: The files ``mazeslam smooth`` writes.
-SMOOTH_FILES = ("trajectory.csv", "map.json", "*.tum", "smooth.png")
+SMOOTH_FILES = ("trajectory.csv", "map.json", "*.tum", "smooth.png", "occupancy.pgm", "occupancy.yaml")
 
 
 def default_out_dir(log_file: str | Path, command: str, base: str | Path = "runs") -> Path:

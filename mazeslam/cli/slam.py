@@ -34,6 +34,8 @@ from mazeslam.pipeline.outputs import consistency
 from mazeslam.viz.run_files import figure_title, landmark_figure_call, trusted_span, write_run
 
 if TYPE_CHECKING:
+    import numpy as np
+
     from mazeslam.viz.live import GridLiveView, LiveView
 
 #: About how many frames ``--animate`` draws, whatever the log's length.
@@ -107,6 +109,13 @@ FIGURE_MODULES = (
     show_default=True,
     help="With --live: log seconds shown per second (1: the log's own pace, 10: ten times faster).",
 )
+@click.option(
+    "--optimum",
+    "optimum_dir",
+    type=click.Path(exists=True, file_okay=False, path_type=Path),
+    help="Grid filter: a `mazeslam smooth` output folder of the same log, the pose graph its errors are set "
+    "beside [default: runs/<log name>/smooth/ when it holds one]. Corner FastSLAM's optimum is worked out here.",
+)
 @beam_geometry_options
 @click.option("--quiet", is_flag=True, help="No progress bar.")
 def slam(
@@ -121,6 +130,7 @@ def slam(
     animate,
     live,
     speed,
+    optimum_dir,
     first_beam_angle,
     beam_direction,
     mount_x,
@@ -154,6 +164,7 @@ def slam(
             map_kind=map_kind,
             side_process=True,
             say=click.echo,
+            optimum_dir=optimum_dir or default_out_dir(log_file, "smooth"),
         )
     click.echo("\n".join(lines))
     click.echo(f"results in {out_dir}")
@@ -173,6 +184,7 @@ def run_slam_command(
     side_process: bool = False,
     say=None,
     speed: float = 1.0,
+    optimum_dir: Path | None = None,
 ) -> list[str]:
     """Run, write ``out_dir``/{trajectory.csv, best_trajectory.csv, map.json, slam.png, occupancy.pgm/.yaml/.png,
     landmarks.csv[, slam.gif]}, replacing the last run's files (``SLAM_FILES``) once all are written
@@ -186,7 +198,9 @@ def run_slam_command(
     forked before the filter runs, which loads matplotlib meanwhile and draws while this process
     scores the run and writes the rest (the command line's way; otherwise they are made here).
     Without ``config_path``, the config that fits the log's kind runs (``settings_for``); the line
-    saying which goes to ``say`` at once when given, else to the lines."""
+    saying which goes to ``say`` at once when given, else to the lines. ``optimum_dir``: the
+    ``mazeslam smooth`` folder whose pose graph of the log a grid run with truth is set beside, when
+    it holds one (corner FastSLAM's optimum is worked out here)."""
     config, chosen = settings_for(log_file, config_path)
     if say is not None and chosen is not None:
         say(chosen)
@@ -205,13 +219,16 @@ def run_slam_command(
         notes.append(
             f"note: {' and '.join(unused)} set corner FastSLAM's [fastslam]; the grid filter runs ([map] kind)"
         )
+    graph_poses = _pose_graph(run, optimum_dir) if grid else None  # read first: a wrong folder fails at once
     # The side process ends (its drawing stopped) before the staging folder is committed or removed.
     with (
         staged_outputs(out_dir, SLAM_FILES) as staging,
         SideProcess(FIGURE_MODULES, fork=side_process and not grid) as side,
     ):
         live_speed = speed if live else None
-        lines, paths = _run_and_write(log_file, run, config, staging, notes, animate, progress, live_speed, echo, side)
+        lines, paths = _run_and_write(
+            log_file, run, config, staging, notes, animate, progress, live_speed, echo, side, graph_poses
+        )
     return [*lines, "wrote " + ", ".join(str(Path(out_dir) / path.name) for path in paths.values())]
 
 
@@ -226,6 +243,7 @@ def _run_and_write(
     live_speed: float | None,
     echo,
     side,
+    graph_poses: np.ndarray | None = None,
 ) -> tuple[list[str], dict[str, Path]]:
     """``run_slam_command`` once the settings and the log are read: the filter, its outputs written
     into ``out_dir`` (the staging folder) and the lines to print, with the paths written by name;
@@ -290,17 +308,42 @@ def _run_and_write(
         extra["ate"] = score.row_records()
         extra["map_error"] = score.map_errors
         extra["nees"] = score.nees_summary
-        from mazeslam.smoothing.optimum import optimum_columns, optimum_line  # scipy.sparse: 0.3 s, for a truth's runs
-
-        optimum = optimum_columns(run, config, score)
+        optimum_lines, optimum = _optimum(run, config, result, score, graph_poses)
+        lines += optimum_lines
         if optimum is not None:
-            lines.append(optimum_line(optimum, result.filter_name))
             extra["optimum"] = optimum
     else:
         lines.append("no ground truth beside the log: no errors to report")
     drawn = None if grid else side.result()  # slam.png and the map export
     paths = write_run(out_dir, run, config, result, extra, animate, progress, drawn)
     return lines, paths
+
+
+def _pose_graph(run: LoadedRun, optimum_dir: Path | None) -> np.ndarray | None:
+    """The poses (R, 3) of a ``mazeslam smooth`` run of ``run``'s log in ``optimum_dir`` (None
+    without one, or without truth to score it by); an error naming the folder if it is another log's."""
+    if optimum_dir is None or run.truth is None:
+        return None
+    from mazeslam.smoothing.optimum import smoothed_poses  # scipy.sparse: 0.3 s, for a truth's runs
+
+    return smoothed_poses(run, optimum_dir)
+
+
+def _optimum(
+    run: LoadedRun, config: SlamConfig, result: SlamResult, score, graph_poses: np.ndarray | None
+) -> tuple[list[str], dict | None]:
+    """The filter's ratio to the optimum (``optimum_columns``) and its line: corner FastSLAM's worked
+    out here, the grid filter's the pose graph ``graph_poses`` (R, 3) of a ``mazeslam smooth`` run,
+    which takes longer than the filter on a building's log; without it, a line saying how to get one."""
+    from mazeslam.smoothing.optimum import optimum_columns, optimum_line  # scipy.sparse: 0.3 s, for a truth's runs
+
+    if config.map.kind == MapKind.GRID and graph_poses is None:
+        return [
+            f"No pose graph of this log to set the grid filter beside: `mazeslam smooth {run.path}` makes one "
+            "(runs/<log name>/smooth/, or give its folder with --optimum)"
+        ], None
+    optimum = optimum_columns(run, config, score, graph_poses)
+    return ([] if optimum is None else [optimum_line(optimum, result.filter_name)]), optimum
 
 
 def _run_lines(

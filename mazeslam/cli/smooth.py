@@ -1,7 +1,12 @@
-"""``mazeslam smooth``: the batch least-squares optimum of a log (``mazeslam.smoothing.smoother``), its outputs,
-and the optimum beside a FastSLAM run (``mazeslam slam`` and sweeps report the filter's ratio to it).
+"""``mazeslam smooth``: the batch least-squares optimum of a log, its outputs, and the optimum beside a
+filter run (``mazeslam slam`` and sweeps report the filter's ratio to it). The config's ``[map] kind``
+says which (the config that fits the log's kind when none is given, as for ``mazeslam slam``):
 
-Association, which landmark each corner is, comes from outside the smoother:
+* ``grid``: the pose graph of the scans (``mazeslam.smoothing.laser_optimum``: the laser odometry and
+  loop closures, solved robustly), the map its poses draw, and a figure of the graph over it;
+* ``landmarks``: corner landmarks and poses by least squares (``mazeslam.smoothing.smoother``).
+
+Association of the corner smoother, which landmark each corner is, comes from outside it:
 
 * ``known``: the true corner within ``[evaluation] match_radius`` of where the true pose puts the
   observation (``slam.truth_identities``); simulated and referenced logs with a map of corners;
@@ -27,6 +32,7 @@ import numpy as np
 
 from mazeslam.cli.options import beam_geometry_options, geometry_overrides
 from mazeslam.cli.run_folders import SMOOTH_FILES, check_same_log, default_out_dir, output_folder
+from mazeslam.cli.smooth_laser import laser_smooth_lines
 from mazeslam.core.beams import SensorOverrides
 from mazeslam.core.config import jsonable
 from mazeslam.core.motion import dead_reckoning
@@ -35,11 +41,13 @@ from mazeslam.data import sidecars
 from mazeslam.data.beam_detection import with_detected_convention
 from mazeslam.data.loaded_run import LoadedRun, load_run
 from mazeslam.data.scans import scan_points_world
-from mazeslam.evaluation.consistency import nees_summary
+from mazeslam.evaluation.consistency import POSE_BOUND_95, nees_summary, summary_words
 from mazeslam.evaluation.metrics import align_se2, apply_se2, map_error, normalized_estimation_error
 from mazeslam.evaluation.scoring import DEAD_RECKONING, error_table
 from mazeslam.fastslam.identities import truth_identities
-from mazeslam.pipeline import SlamConfig, load_slam_config
+from mazeslam.pipeline import SlamConfig
+from mazeslam.pipeline.config import MapKind
+from mazeslam.pipeline.log_kinds import settings_for
 from mazeslam.smoothing.optimum import OPTIMUM, Smoothed, from_run_identities, smooth_run
 from mazeslam.viz.smooth_figure import plot_smoothed
 
@@ -50,14 +58,15 @@ from mazeslam.viz.smooth_figure import plot_smoothed
     "--config",
     "config_path",
     type=click.Path(exists=True, dir_okay=False, path_type=Path),
-    help="The slam TOML whose [fastslam] noise, [corners] and [sensor] to use (see configs/fastslam.toml).",
+    help="The slam TOML: [map] kind = grid smooths a pose graph of the scans ([scan_matching], [posegraph], "
+    "[grid.grid]), landmarks the corners ([fastslam] noise, [corners]) [default: the config that fits the "
+    "log's kind, as for `mazeslam slam`].",
 )
 @click.option(
     "--association",
     type=click.Choice(["known", "from-run"]),
-    default="known",
-    show_default=True,
-    help="known: the true corners (truth and map sidecars); from-run: the map of a `mazeslam slam` run.",
+    help="Smooth the corners, named by: known (the default for a corner config) the true corners (truth and "
+    "map sidecars); from-run the map of a `mazeslam slam` run. A grid config without it smooths a pose graph.",
 )
 @click.argument("run_dir", required=False, type=click.Path(exists=True, file_okay=False, path_type=Path))
 @click.option(
@@ -70,9 +79,11 @@ from mazeslam.viz.smooth_figure import plot_smoothed
 )
 @beam_geometry_options
 def smooth(log_file, config_path, association, run_dir, out_dir, first_beam_angle, beam_direction, mount_x):
-    """Batch least-squares SLAM over the whole log: the optimum FastSLAM is measured against.
+    """Batch least-squares SLAM over the whole log: the optimum the filters are measured against.
 
-    With --association from-run, RUN_DIR is the output folder of `mazeslam slam` on the same log."""
+    A grid config ([map] kind = "grid") smooths a pose graph of the scans with loop closures; a corner
+    config, or --association, the corners and poses. With --association from-run, RUN_DIR is the output folder of
+    `mazeslam slam` on the same log."""
     if (association == "from-run") != (run_dir is not None):
         raise click.UsageError("RUN_DIR goes with --association from-run, and only with it")
     given = out_dir is not None
@@ -83,19 +94,34 @@ def smooth(log_file, config_path, association, run_dir, out_dir, first_beam_angl
     with output_folder(out_dir) as out_dir:
         if not given:  # a/run.log and b/run.log both default to runs/run/smooth
             check_same_log(out_dir, log_file, "smooth")
-        lines = run_smooth_command(log_file, config_path, out_dir, association, run_dir, overrides)
+        lines = run_smooth_command(log_file, config_path, out_dir, association, run_dir, overrides, say=click.echo)
     click.echo("\n".join(lines))
     click.echo(f"results in {out_dir}")
 
 
 def run_smooth_command(
-    log_file, config_path, out_dir, association: str = "known", run_dir=None, sensor: SensorOverrides | None = None
+    log_file,
+    config_path,
+    out_dir,
+    association: str | None = None,
+    run_dir=None,
+    sensor: SensorOverrides | None = None,
+    say=None,
 ) -> list[str]:
-    """Smooth, write ``out_dir``/{trajectory.csv, trajectory.tum, map.json, smooth.png} (replacing the
-    last run's files once all are written: ``staged_outputs``); return the lines to print.
-    ``association``: "known" (the truth's corners) or "from-run" (``run_dir``'s map)."""
-    config = load_slam_config(config_path)
+    """Smooth, write ``out_dir``/{trajectory.csv, trajectory.tum, map.json, smooth.png} and, for a grid
+    config, occupancy.pgm/.yaml (replacing the last run's files once all are written:
+    ``staged_outputs``); return the lines to print. ``association`` smooths the corners, named by
+    "known" (the truth's corners; the default for a corner config) or "from-run" (``run_dir``'s map);
+    a grid config without it smooths the pose graph of the scans. Without ``config_path``, the
+    config that fits the log's kind (``settings_for``; the line saying so to ``say`` at once when given)."""
+    config, chosen = settings_for(log_file, config_path)
+    if say is not None and chosen is not None:
+        say(chosen)
+        chosen = None
     config = config.with_sensor(sensor)
+    if config.map.kind == MapKind.GRID and association is None:
+        return [line for line in [chosen] if line] + laser_smooth_lines(log_file, config, Path(out_dir))
+    association = association or "known"
     run = load_run(log_file, config.sensor)
     run = with_detected_convention(run, config, cache_folder=Path(out_dir))
     radius = config.evaluation.match_radius
@@ -103,7 +129,8 @@ def run_smooth_command(
         if run.truth is None or not len(run.true_corners):
             raise ValueError(
                 f"{run.path}: --association known needs the truth and map sidecars with the true corners "
-                f"({run.name}.truth.csv, {run.name}.map.json); use --association from-run RUN_DIR"
+                f"({run.name}.truth.csv, {run.name}.map.json); use --association from-run RUN_DIR, or a grid "
+                "config (--config configs/carmen.toml) for a pose graph of the scans"
             )
         identify, how = truth_identities(run, radius), f"known: the true corner within {radius:g} m"
     else:
@@ -148,7 +175,7 @@ def run_smooth_command(
     with staged_outputs(out_dir, SMOOTH_FILES) as staging:
         paths = _write_outputs(staging, run, config, smoothed, document)
     lines.append("wrote " + ", ".join(str(Path(out_dir) / path.name) for path in paths.values()))
-    return lines
+    return [line for line in [chosen] if line] + lines
 
 
 def _errors(run: LoadedRun, truth: np.ndarray, smoothed: Smoothed, radius: float) -> tuple[dict, list[str]]:
@@ -170,13 +197,7 @@ def _errors(run: LoadedRun, truth: np.ndarray, smoothed: Smoothed, radius: float
             "RPE [m, rad]:"
         ),
         table.to_markdown(floatfmt=".4f"),
-        f"Pose NEES at the {nees['count']} scans (consistent: 3): "
-        + (
-            f"mean {nees['mean']:.2f}, median {nees['median']:.2f}, "
-            f"{100 * nees['inside_95']:.0f} % inside the 95 % bound"
-            if nees["count"]
-            else "undefined"
-        ),
+        f"Pose NEES at the {nees['count']} scans: {summary_words(nees, POSE_BOUND_95, 3)}",
     ]
     if len(run.true_corners):
         errors = map_errors["as estimated"]

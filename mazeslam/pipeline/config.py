@@ -2,8 +2,8 @@
 
 Sections: ``[map]`` (which filter: corner landmarks or an occupancy grid), ``[fastslam]`` or
 ``[grid]`` (that filter's settings), ``[corners]`` (with ``[corners.lines]``), ``[sensor]``,
-``[odometry]``, ``[scan_matching]`` and ``[evaluation]``. ``mazeslam.pipeline.run_slam`` reads
-``[map] kind`` and runs the filter it names.
+``[odometry]``, ``[scan_matching]``, ``[posegraph]`` (a laser log's optimum, ``mazeslam smooth``)
+and ``[evaluation]``. ``mazeslam.pipeline.run_slam`` reads ``[map] kind`` and runs the filter it names.
 """
 
 from __future__ import annotations
@@ -18,6 +18,7 @@ from mazeslam.core.config import load_toml
 from mazeslam.fastslam.filter import FastSLAMParams
 from mazeslam.features.corners import CornerParams
 from mazeslam.gridslam.filter import GridSlamParams
+from mazeslam.posegraph.params import PoseGraphParams
 from mazeslam.registration.scan_matching import ScanMatchParams
 
 
@@ -70,8 +71,8 @@ class MapParams:
 @dataclass(frozen=True)
 class SlamConfig:
     """Everything ``mazeslam slam`` needs; TOML sections ``[map]``, ``[fastslam]`` or ``[grid]``,
-    ``[corners]`` (with ``[corners.lines]``), ``[sensor]``, ``[odometry]``, ``[scan_matching]`` and
-    ``[evaluation]``. The grid filter moves by ``[scan_matching]``'s laser odometry when that is
+    ``[corners]`` (with ``[corners.lines]``), ``[sensor]``, ``[odometry]``, ``[scan_matching]``,
+    ``[posegraph]`` and ``[evaluation]``. The grid filter moves by ``[scan_matching]``'s laser odometry when that is
     enabled."""
 
     map: MapParams = field(default_factory=MapParams)
@@ -81,6 +82,7 @@ class SlamConfig:
     sensor: SensorOverrides = field(default_factory=SensorOverrides)
     odometry: OdometryCleaning = field(default_factory=OdometryCleaning)
     scan_matching: ScanMatchParams = field(default_factory=ScanMatchParams)
+    posegraph: PoseGraphParams = field(default_factory=PoseGraphParams)
     evaluation: EvaluationParams = field(default_factory=EvaluationParams)
 
     @property

@@ -175,6 +175,28 @@ def match_scan(
     return _score(reference, points, pose, prior, prior_information, params)
 
 
+def match_information(
+    reference: ReferenceScan, points: np.ndarray, pose: np.ndarray, params: ScanMatchParams
+) -> np.ndarray:
+    """The data term's Gauss-Newton Hessian (3, 3) at ``pose`` (3,): the information the points
+    (K, 2) (robot frame) give on the pose, without the prior, in ``match_scan``'s units (residuals
+    of ``point_noise``, scaled to 100 points; 1/m^2, 1/(m rad), 1/rad^2).
+
+    Pairs within the last correspondence distance on a straight surface count, with their Huber
+    weight, as in the last iteration of ``match_scan``. Along a featureless corridor it is singular in
+    the corridor's direction (Censi 2007's covariance of ICP, the part the data can fix)."""
+    moved = transform_points(pose, points)
+    gap, nearest = reference.tree.query(moved, distance_upper_bound=params.correspondence_distances[-1])
+    used = np.isfinite(gap)
+    used[used] = reference.straight[nearest[used]]
+    normal = reference.normals[nearest[used]]
+    residual = np.einsum("ij,ij->i", moved[used] - reference.points[nearest[used]], normal)
+    arm = moved[used] - pose[:2]
+    jacobian = np.column_stack([normal, normal[:, 1] * arm[:, 0] - normal[:, 0] * arm[:, 1]])
+    weight = _data_scale(points, params) / np.maximum(1.0, np.abs(residual) / params.point_noise)
+    return (jacobian * weight[:, None]).T @ jacobian
+
+
 def _score(
     reference: ReferenceScan,
     points: np.ndarray,

@@ -1,6 +1,8 @@
-"""The batch optimum of a log beside a filter run: the known-association smoother's poses at every
-record (``known_optimum``) and the filter's ATE ratio to it (``optimum_columns``: 1 is as good as
-any estimator can be), used by ``mazeslam slam``, sweeps and ``mazeslam smooth``.
+"""The batch optimum of a log beside a filter run: its poses at every record (``optimum_poses``) and the
+filter's ATE ratio to it (``optimum_columns``: 1 is as good as any estimator can be), used by
+``mazeslam slam``, sweeps and ``mazeslam smooth``. A corner config's optimum is the known-association
+smoother of corners and poses (``known_optimum``); a grid config's, the pose graph of the scans with
+loop closures (``mazeslam.smoothing.laser_optimum``).
 
 Association comes from outside the smoother: the truth's corners (``truth_identities``) or a
 finished ``mazeslam slam`` run's map (``from_run_identities``). Noise: the config's ``[fastslam]``
@@ -24,7 +26,8 @@ from mazeslam.data.loaded_run import LoadedRun
 from mazeslam.evaluation.scoring import RunScore, error_rows
 from mazeslam.fastslam.identities import identities_along, truth_identities
 from mazeslam.features.corners import CornerExtractor
-from mazeslam.pipeline.config import SlamConfig
+from mazeslam.pipeline.config import MapKind, SlamConfig
+from mazeslam.smoothing.laser_optimum import has_laser_optimum, smooth_laser_run
 from mazeslam.smoothing.smoother import SmoothingResult, expand_to_records, smooth_known_association
 
 #: The optimum's row in error tables.
@@ -79,20 +82,33 @@ def known_optimum(run: LoadedRun, config: SlamConfig) -> Smoothed:
     return smooth_run(run, config, truth_identities(run, config.evaluation.match_radius))
 
 
+def has_optimum(run: LoadedRun, config: SlamConfig) -> bool:
+    """``run`` has an optimum to score ``config``'s filter against: the pose graph of its scans
+    (``has_laser_optimum``) for a grid, the known-association smoother (``has_known_optimum``) for corners."""
+    return has_laser_optimum(run) if config.map.kind == MapKind.GRID else has_known_optimum(run)
+
+
+def optimum_poses(run: LoadedRun, config: SlamConfig) -> np.ndarray:
+    """The optimum's poses (R, 3) at every record of ``run`` for ``config``'s filter (``has_optimum``
+    must hold): the pose graph's (``smooth_laser_run``) or the known-association smoother's."""
+    if config.map.kind == MapKind.GRID:
+        return smooth_laser_run(run, config).poses
+    return known_optimum(run, config).poses
+
+
 def optimum_columns(
-    run: LoadedRun, config: SlamConfig, score: RunScore, optimum_poses: np.ndarray | None = None
+    run: LoadedRun, config: SlamConfig, score: RunScore, poses: np.ndarray | None = None
 ) -> dict | None:
-    """The known-association optimum's ATE RMSE (m, as estimated and aligned) at the records the filter
-    was scored at (``score.records``) and the filter's ratio to it (``optimum_ratio``,
-    ``optimum_aligned_ratio``: 1 is as good as any estimator can be; NaN where the optimum has no
-    error, as on a log of one pose); None without ``has_known_optimum``.
-    ``optimum_poses``: ``known_optimum(run, config).poses`` (R, 3) if already computed (a sweep computes
-    it once for the runs that share a log and the settings it depends on)."""
-    if run.truth is None or not has_known_optimum(run):
+    """The optimum's ATE RMSE (m, as estimated and aligned) at the records the filter was scored at
+    (``score.records``) and the filter's ratio to it (``optimum_ratio``, ``optimum_aligned_ratio``: 1
+    is as good as any estimator can be; NaN where the optimum has no error, as on a log of one pose);
+    None without ``has_optimum``. ``poses``: ``optimum_poses(run, config)`` (R, 3) if already
+    computed (a sweep computes them once for the runs that share a log and the settings they depend on)."""
+    if run.truth is None or not has_optimum(run, config):
         return None
-    if optimum_poses is None:
-        optimum_poses = known_optimum(run, config).poses
-    poses, truth = optimum_poses[score.records], run.truth[score.records]
+    if poses is None:
+        poses = optimum_poses(run, config)
+    poses, truth = poses[score.records], run.truth[score.records]
     row = error_rows({OPTIMUM: poses}, truth)[OPTIMUM]
     return {
         "optimum_ate_rmse": row["ate_rmse"],
@@ -114,20 +130,38 @@ def _ratio(error: float, optimum: float) -> float:
 
 
 def optimum_line(columns: dict, filter_name: str = "FastSLAM") -> str:
-    """``optimum_columns`` as one line for ``mazeslam slam`` (the filter named ``filter_name``; the
-    optimum is always of the corner landmarks with ``[fastslam]``'s noise, which the line says when
-    the filter is another)."""
+    """``optimum_columns`` as one line for ``mazeslam slam`` (the filter named ``filter_name``: the
+    grid filter's optimum is the pose graph of the scans, FastSLAM's the corners smoothed with its noise)."""
     ratio, aligned = (
         "undefined" if math.isnan(columns[key]) else f"{columns[key]:.2f}"
         for key in ("optimum_ratio", "optimum_aligned_ratio")
     )
-    # The optimum smooths the corners with [fastslam]'s noise: the grid filter's own noise is not it.
-    noise = "the filter's noise" if filter_name == "FastSLAM" else "corner landmarks, [fastslam]'s noise"
+    what = "pose graph of the scans, loop closures" if filter_name == "grid filter" else "known association"
     return (
-        f"Batch optimum (known association, {noise}): ATE {columns['optimum_ate_rmse']:.4f} m "
+        f"Batch optimum ({what}): ATE {columns['optimum_ate_rmse']:.4f} m "
         f"(aligned {columns['optimum_ate_aligned_rmse']:.4f} m); {filter_name}/optimum ratio {ratio} (aligned "
         f"{aligned})" + (": the optimum has no error" if "undefined" in (ratio, aligned) else "")
     )
+
+
+def smoothed_poses(run: LoadedRun, folder: str | Path) -> np.ndarray | None:
+    """The poses (R, 3) at every record of ``run`` that a ``mazeslam smooth`` of the same log wrote into
+    ``folder`` (its trajectory.csv), None when the folder holds no smooth run; an error when it holds
+    the run of another log (its map.json's ``source``, or a record count that differs)."""
+    folder = Path(folder)
+    trajectory, document = folder / "trajectory.csv", folder / "map.json"
+    if not (trajectory.is_file() and document.is_file()):
+        return None
+    try:
+        source = json.loads(read_text(document, "map"))["source"]
+    except (json.JSONDecodeError, KeyError, TypeError) as error:
+        raise ValueError(f"{document}: not the map.json of a `mazeslam smooth` run (no 'source')") from error
+    if Path(source).resolve() != run.path.resolve():
+        raise ValueError(f"{folder}: the smooth run of {source}, not of {run.path}")
+    poses = sidecars.read_trajectory(trajectory)[1]
+    if len(poses) != len(run.log):
+        raise ValueError(f"{trajectory}: {len(poses)} poses for the {len(run.log)} records of {run.path}")
+    return poses
 
 
 def from_run_identities(run: LoadedRun, run_dir: str | Path, radius: float):

@@ -34,6 +34,7 @@ from mazeslam.core.geometry import (
     transform_points,
     wrap_angle,
 )
+from mazeslam.core.least_squares import block_entries, relative_pose_residual
 from mazeslam.core.motion import dead_reckoning
 from mazeslam.data.log import CourseLog
 from mazeslam.fastslam import ekf
@@ -114,32 +115,6 @@ def range_bearing_residual(
     """
     predicted, j_landmark, j_pose = ekf.range_bearing(poses, landmarks)
     return -ekf.innovation(observations, predicted), j_pose, j_landmark
-
-
-def odometry_residual(
-    from_poses: np.ndarray, to_poses: np.ndarray, measured: np.ndarray
-) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Residual of relative-pose factors: ``relative(from, to) - measured``, heading wrapped.
-
-    Args:
-        from_poses, to_poses: (n, 3) poses, world frame.
-        measured: (n, 3) measured relative poses, in the frame of ``from_poses``.
-    Returns:
-        residual (n, 3): dx, dy (m) in the frame of ``from_poses``, dth (rad);
-        j_from (n, 3, 3): d residual / d from_pose;
-        j_to (n, 3, 3): d residual / d to_pose.
-    """
-    residual = relative(from_poses, to_poses) - measured
-    residual[:, 2] = wrap_angle(residual[:, 2])
-    cos_a, sin_a = np.cos(from_poses[:, 2]), np.sin(from_poses[:, 2])
-    dx, dy = to_poses[:, 0] - from_poses[:, 0], to_poses[:, 1] - from_poses[:, 1]
-    j_to = np.zeros((len(dx), 3, 3))
-    j_to[:, 0, 0], j_to[:, 0, 1], j_to[:, 1, 0], j_to[:, 1, 1] = cos_a, sin_a, -sin_a, cos_a
-    j_to[:, 2, 2] = 1.0
-    j_from = -j_to
-    j_from[:, 0, 2] = -sin_a * dx + cos_a * dy
-    j_from[:, 1, 2] = -cos_a * dx - sin_a * dy
-    return residual, j_from, j_to
 
 
 # -- the problem ----------------------------------------------------------------------------------
@@ -362,7 +337,7 @@ def _whitened_system(
     s = len(poses)
     # 1. Odometry factors: previous pose (the fixed start pose for the first) to each pose.
     previous = np.vstack([problem.start_pose, poses[:-1]])
-    r_odo, j_from, j_to = odometry_residual(previous, poses, problem.odometry)
+    r_odo, j_from, j_to = relative_pose_residual(previous, poses, problem.odometry)
     # 2. Observation factors.
     k = problem.observation_poses
     r_obs, j_pose, j_landmark = range_bearing_residual(
@@ -376,7 +351,7 @@ def _whitened_system(
         (w_obs @ j_pose, 3 * s + 2 * np.arange(len(k)), 3 * k),
         (w_obs @ j_landmark, 3 * s + 2 * np.arange(len(k)), 3 * s + 2 * problem.observation_landmarks),
     ]
-    rows, columns, values = zip(*(_block_entries(*block) for block in blocks))
+    rows, columns, values = zip(*(block_entries(*block) for block in blocks))
     shape = (3 * s + 2 * len(k), 3 * s + 2 * len(landmarks))
     entries = (np.concatenate(values), (np.concatenate(rows), np.concatenate(columns)))
     jacobian = scipy.sparse.csr_array(entries, shape)
@@ -384,14 +359,6 @@ def _whitened_system(
         [np.einsum("nij,nj->ni", w_odo, r_odo).ravel(), np.einsum("nij,nj->ni", w_obs, r_obs).ravel()]
     )
     return residual, jacobian
-
-
-def _block_entries(blocks: np.ndarray, first_rows: np.ndarray, first_columns: np.ndarray):
-    """Rows, columns and values of dense blocks (n, a, b) placed at (first_rows[i], first_columns[i])."""
-    _, a, b = blocks.shape
-    rows = np.broadcast_to(first_rows[:, None, None] + np.arange(a)[None, :, None], blocks.shape)
-    columns = np.broadcast_to(first_columns[:, None, None] + np.arange(b)[None, None, :], blocks.shape)
-    return rows.ravel(), columns.ravel(), blocks.ravel()
 
 
 def _moved(poses: np.ndarray, landmarks: np.ndarray, step: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

@@ -64,7 +64,7 @@ from mazeslam.evaluation.metrics import apply_se2
 from mazeslam.evaluation.scoring import DEAD_RECKONING, score_run
 from mazeslam.pipeline import MapKind, SlamConfig, load_slam_config, run_slam
 from mazeslam.sim.simulator import SimulationConfig, load_config, simulate
-from mazeslam.smoothing.optimum import has_known_optimum, known_optimum, optimum_columns
+from mazeslam.smoothing.optimum import has_optimum, optimum_columns, optimum_poses
 from mazeslam.sweeps.pool import ends_with_this_process
 
 RESULTS = "runs.jsonl"
@@ -258,14 +258,18 @@ def simulate_run(sweep: Sweep, run: dict, logs_folder: str) -> str:
 
 
 def optimum_key(sweep: Sweep, run: dict) -> str:
-    """A stable name for a run's batch optimum: its log (``simulation_key``) and its slam settings but
-    the filter's particle count and seed, the map kind and the grid filter's settings, which the
-    smoother does not use (the core grid's three particle counts share one optimum per noise
-    setting and seed)."""
+    """A stable name for a run's batch optimum: its log (``simulation_key``), the map kind and the slam
+    settings the optimum uses: for corners all but the filters' particle counts and seeds, the grid
+    filter's and the pose graph's settings (the core grid's three particle counts share one optimum
+    per noise setting and seed); for a grid all but the filters' (the pose graph's own)."""
     _, slam_config = configure(sweep, run["settings"])
     settings = dataclasses.asdict(slam_config)
-    del settings["fastslam"]["NPARTICLES"], settings["fastslam"]["seed"], settings["grid"], settings["map"]
-    identity = {"log": simulation_key(sweep, run), "slam": settings}
+    del settings["grid"], settings["map"]
+    if slam_config.map.kind == MapKind.GRID:
+        del settings["fastslam"], settings["corners"]
+    else:
+        del settings["fastslam"]["NPARTICLES"], settings["fastslam"]["seed"], settings["posegraph"]
+    identity = {"log": simulation_key(sweep, run), "kind": str(slam_config.map.kind), "slam": settings}
     return hashlib.sha1(json.dumps(identity, sort_keys=True, default=str).encode()).hexdigest()[:16]
 
 
@@ -274,13 +278,13 @@ def _optimum_path(sweep: Sweep, run: dict, logs_folder: str) -> Path:
 
 
 def optimum_run(sweep: Sweep, run: dict, logs_folder: str) -> None:
-    """Compute the known-association batch optimum of ``run``'s log (written by ``simulate_run`` into
-    ``logs_folder``) with ``run``'s settings, and save its poses at every record, (R, 3), beside the log
-    for ``execute_run`` (nothing when the log has no known optimum). Runs in a worker."""
+    """Compute the batch optimum of ``run``'s log (written by ``simulate_run`` into ``logs_folder``) with
+    ``run``'s settings (``optimum_poses``), and save its poses at every record, (R, 3), beside the log
+    for ``execute_run`` (nothing when the log has no optimum: ``has_optimum``). Runs in a worker."""
     _, slam_config = configure(sweep, run["settings"])
     loaded = load_run(Path(logs_folder, simulation_key(sweep, run), "run.log"), slam_config.sensor)
-    if has_known_optimum(loaded):
-        np.save(_optimum_path(sweep, run, logs_folder), known_optimum(loaded, slam_config).poses)
+    if has_optimum(loaded, slam_config):
+        np.save(_optimum_path(sweep, run, logs_folder), optimum_poses(loaded, slam_config))
 
 
 def execute_run(sweep: Sweep, run: dict, maps_folder: str | None = None, logs_folder: str | None = None) -> dict:

@@ -52,4 +52,4 @@ def plot_pose_graph(
     mark_start(ax, poses, "tab:blue")
     mark_end(ax, poses, "tab:blue")
     ax.set(xlabel="x [m]", ylabel="y [m]", aspect="equal")
-    return save_figure(fig, ax, path, title)
+    return save_figure(fig, ax, path, title, legend_columns=3)

@@ -1,0 +1,96 @@
+"""Scan-to-submap matching and its ambiguity test on simulated corridors (the virtual laser, 1 cm
+noise): a corridor whose pillars repeat every 2 m is refused (two equally good modes within the
+window), a featureless one too (nothing fixes the motion along it), and one whose pillars are
+irregular is accepted at the true pose."""
+
+import numpy as np
+import pytest
+
+from mazeslam.core.geometry import relative
+from mazeslam.posegraph.closures import (
+    build_submap,
+    candidate_pairs,
+    keyframes,
+    match_to_submap,
+    voxel_thinned,
+)
+from mazeslam.posegraph.graph import EdgeKind
+from mazeslam.posegraph.params import ClosureParams, SequentialParams
+from mazeslam.registration.scan_matching import ScanMatchParams, scan_points
+from mazeslam.sim.building import LASER
+from mazeslam.sim.laser import VirtualLaser
+
+SCAN = ScanMatchParams(enabled=True, max_range=8.0)
+
+
+def _box(x0, y0, x1, y1):
+    return [[x0, y0, x1, y0], [x1, y0, x1, y1], [x1, y1, x0, y1], [x0, y1, x0, y0]]
+
+
+def _corridor(pillars) -> np.ndarray:
+    """A corridor 2 m wide and 200 m long along x, with 0.4 x 0.3 m pillars against its lower wall at ``pillars``."""
+    walls = [[-100.0, 0.0, 100.0, 0.0], [-100.0, 2.0, 100.0, 2.0]]
+    for x in pillars:
+        walls += _box(x, 0.0, x + 0.4, 0.3)
+    return np.array(walls)
+
+
+def _match(walls, true_offset, guess_offset):
+    """The submap of scans from x = -4..4 (every metre, facing both ways, anchored at the first)
+    and the query at ``true_offset`` (x) facing +x, matched from a guess ``guess_offset`` with a
+    1 m, 0.1 rad window; returns within 8 m, so that the submap covers all the query sees at every
+    pose the window reaches."""
+    rng = np.random.default_rng(0)
+    laser = VirtualLaser(LASER, walls)
+    mapped = [[x, 1.0, heading] for heading in (0.0, np.pi) for x in np.arange(-4.0, 4.5, 1.0)]
+    poses = np.array([*mapped, [true_offset, 1.0, 0.0]])
+    points = [scan_points(laser.scan(pose, rng), LASER.geometry, SCAN) for pose in poses]
+    params = ClosureParams()
+    submap = build_submap(0, np.arange(len(mapped)), poses, points, params, SCAN)
+    assert submap is not None
+    guess = relative(poses[0], [guess_offset, 1.0, 0.0])
+    window = np.diag([1.0, 1.0, 0.1**2])
+    match = match_to_submap(submap, points[-1], guess, window, params, SCAN, SequentialParams())
+    return match, relative(poses[0], poses[-1])
+
+
+def test_a_corridor_with_pillars_every_two_metres_is_refused_as_ambiguous():
+    match, _ = _match(_corridor(np.arange(-100.0, 100.0, 2.0) + 0.3), true_offset=2.0, guess_offset=2.5)
+    assert match.refusal == "ambiguous"
+    assert match.second < match.best / ClosureParams().ambiguity_ratio
+
+
+def test_a_featureless_corridor_is_refused():
+    match, _ = _match(_corridor([]), true_offset=2.0, guess_offset=2.5)
+    assert not match.accepted
+    assert match.refusal in ("ambiguous", "degenerate")
+
+
+def test_a_corridor_with_irregular_pillars_is_accepted_at_the_true_pose():
+    pillars = [-11.2, -7.1, -3.0, 1.3, 3.4, 4.1, 7.7, 9.2, 13.9, 16.0]
+    match, truth = _match(_corridor(pillars), true_offset=2.0, guess_offset=2.5)
+    assert match.accepted, match
+    assert match.pose == pytest.approx(truth, abs=0.03)
+    assert np.all(np.linalg.eigvalsh(match.covariance) > 0)
+
+
+def test_keyframes_and_candidate_pairs_follow_the_path():
+    # Out along x for 20 m, back along y = 1: the way back passes the way out.
+    out = np.column_stack([np.arange(0, 20, 0.1), np.zeros(200), np.zeros(200)])
+    back = np.column_stack([np.arange(20, 0, -0.1), np.ones(200), np.full(200, np.pi)])
+    poses = np.vstack([out, back])
+    keys = keyframes(poses, 0.5, 0.25)
+    assert np.all(np.diff(keys) <= 5) and keys[0] == 0
+    cumulative = np.column_stack([np.arange(400) * 1e-4, np.arange(400) * 1e-5])
+    pairs = candidate_pairs(poses, keys, cumulative, ClosureParams())
+    local = [(a, q) for a, q, kind in pairs if kind == EdgeKind.LOCAL]
+    closures = [(a, q) for a, q, kind in pairs if kind == EdgeKind.CLOSURE]
+    backs = {int(np.searchsorted(keys, q) - np.searchsorted(keys, a)) for a, q in local}
+    assert backs == set(ClosureParams().local_anchors)
+    assert closures and all(a < 200 <= q for a, q in closures)  # only the way back closes on the way out
+    assert all(abs(poses[a, 0] - poses[q, 0]) < 4.0 for a, q in closures)
+
+
+def test_voxel_thinning_keeps_one_point_per_cell():
+    points = np.array([[0.01, 0.01], [0.02, 0.03], [0.06, 0.01], [0.01, 0.07]])
+    np.testing.assert_array_equal(voxel_thinned(points, 0.05), points[[0, 2, 3]])
