@@ -48,6 +48,7 @@ FIGURES: list[tuple[str, str, str, float]] = [
     ("maze_env", "docs/img/maze_env.png", "python scripts/figures/maze_env.py", 0.3),
     ("vector_env_coverage", "docs/img/vector_env_coverage.png", "python examples/train_vector_explorer.py --figure docs/img/vector_env_coverage.png", 5.0),  # noqa: E501
     ("carmen", "docs/img/carmen/*.png experiments/carmen/results/table.md", "python -m experiments.carmen.run", 15.0),  # noqa: E501
+    ("posegraph_aces", "docs/img/posegraph_aces.png", "mazeslam import carmen {carmen}/aces-corrected.log.gz --out {tmp}/aces.log; mazeslam smooth {tmp}/aces.log --out {tmp}/smooth; copy {tmp}/smooth/smooth.png docs/img/posegraph_aces.png", 1.0),  # noqa: E501
     # experiments/
     ("smooth_404", "experiments/smoother/smooth_404.png", "mazeslam simulate --seed 404 --out {tmp}/s404.log --quiet; mazeslam smooth {tmp}/s404.log --out {tmp}/smooth; copy {tmp}/smooth/smooth.png experiments/smoother/smooth_404.png", 0.5),  # noqa: E501
     ("blind_cloud", "experiments/blind_cloud/results/*/*.png experiments/blind_cloud/results/*/*.json experiments/blind_cloud/results/*/*.csv", "python -m experiments.blind_cloud.run", 0.5),  # noqa: E501

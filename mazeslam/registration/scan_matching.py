@@ -158,15 +158,7 @@ def match_scan(
     scale = _data_scale(points, params)
     for distance in params.correspondence_distances:
         for _ in range(params.iterations_per_stage):
-            moved = transform_points(pose, points)
-            gap, nearest = reference.tree.query(moved, distance_upper_bound=distance)
-            used = np.isfinite(gap)
-            used[used] = reference.straight[nearest[used]]
-            normal = reference.normals[nearest[used]]
-            residual = np.einsum("ij,ij->i", moved[used] - reference.points[nearest[used]], normal)
-            arm = moved[used] - pose[:2]
-            jacobian = np.column_stack([normal, normal[:, 1] * arm[:, 0] - normal[:, 0] * arm[:, 1]])
-            weight = scale / np.maximum(1.0, np.abs(residual) / params.point_noise)
+            jacobian, residual, weight = _paired_terms(reference, points, pose, distance, scale, params)
             offset = _prior_offset(pose, prior)
             hessian = (jacobian * weight[:, None]).T @ jacobian + prior_information
             gradient = (jacobian * weight[:, None]).T @ residual + prior_information @ offset
@@ -185,16 +177,33 @@ def match_information(
     Pairs within the last correspondence distance on a straight surface count, with their Huber
     weight, as in the last iteration of ``match_scan``. Along a featureless corridor it is singular in
     the corridor's direction (Censi 2007's covariance of ICP, the part the data can fix)."""
+    last = params.correspondence_distances[-1]
+    jacobian, _, weight = _paired_terms(reference, points, pose, last, _data_scale(points, params), params)
+    return (jacobian * weight[:, None]).T @ jacobian
+
+
+def _paired_terms(
+    reference: ReferenceScan,
+    points: np.ndarray,
+    pose: np.ndarray,
+    distance: float,
+    scale: float,
+    params: ScanMatchParams,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The point-to-line terms of ``points`` (K, 2) (robot frame) placed at ``pose`` (3,): for each
+    point whose nearest reference point lies within ``distance`` (m) on a straight surface, the
+    Jacobian row (M, 3) of its distance along the surface normal, that distance (M,) m, and its
+    Huber weight (M,), ``scale`` (``_data_scale``) times ``min(1, point_noise / |distance|)``."""
     moved = transform_points(pose, points)
-    gap, nearest = reference.tree.query(moved, distance_upper_bound=params.correspondence_distances[-1])
+    gap, nearest = reference.tree.query(moved, distance_upper_bound=distance)
     used = np.isfinite(gap)
     used[used] = reference.straight[nearest[used]]
     normal = reference.normals[nearest[used]]
     residual = np.einsum("ij,ij->i", moved[used] - reference.points[nearest[used]], normal)
     arm = moved[used] - pose[:2]
     jacobian = np.column_stack([normal, normal[:, 1] * arm[:, 0] - normal[:, 0] * arm[:, 1]])
-    weight = _data_scale(points, params) / np.maximum(1.0, np.abs(residual) / params.point_noise)
-    return (jacobian * weight[:, None]).T @ jacobian
+    weight = scale / np.maximum(1.0, np.abs(residual) / params.point_noise)
+    return jacobian, residual, weight
 
 
 def _score(
