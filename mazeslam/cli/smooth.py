@@ -73,17 +73,18 @@ from mazeslam.viz.smooth_figure import plot_smoothed
     "--out",
     "out_dir",
     type=click.Path(file_okay=False, path_type=Path),
-    help="Folder for trajectory.csv, map.json, smooth.png [default: runs/<log name>/smooth/ under the "
-    "current directory, unless it holds the run of another log of that name]; a run replaces the last run's "
-    "files once all of its own are written (a run that fails leaves them as they were).",
+    help="Folder for trajectory.csv, map.json, smooth.png (a pose graph also occupancy.pgm/.yaml) [default: "
+    "runs/<log name>/smooth/ under the current directory, unless it holds the run of another log of that name]; "
+    "a run replaces the last run's files once all of its own are written (a run that fails leaves them as they "
+    "were).",
 )
 @beam_geometry_options
 def smooth(log_file, config_path, association, run_dir, out_dir, first_beam_angle, beam_direction, mount_x):
     """Batch least-squares SLAM over the whole log: the optimum the filters are measured against.
 
     A grid config ([map] kind = "grid") smooths a pose graph of the scans with loop closures; a corner
-    config, or --association, the corners and poses. With --association from-run, RUN_DIR is the output folder of
-    `mazeslam slam` on the same log."""
+    config, or --association, the corners and poses. With --association from-run, RUN_DIR is the
+    output folder of `mazeslam slam` on the same log."""
     if (association == "from-run") != (run_dir is not None):
         raise click.UsageError("RUN_DIR goes with --association from-run, and only with it")
     given = out_dir is not None
