@@ -21,7 +21,7 @@ ALLOWED = {
     "registration": {"core", "data"},
     "fastslam": {"core", "data", "registration"},
     "gridslam": {"core", "data", "registration"},
-    "posegraph": {"core", "data", "registration"},
+    "posegraph": {"core", "data", "registration", "gridslam"},
     "pipeline": {"core", "data", "features", "registration", "fastslam", "gridslam", "posegraph", "evaluation"},
     "evaluation": {"core", "data", "features", "sim"},
     "smoothing": {

@@ -8,7 +8,8 @@ count as the graph's), CPU seconds against the log's duration and the process's 
 Settings: ``mazeslam.posegraph.laser_graph.PoseGraphParams``'s defaults, and configs/carmen.toml's
 ``[scan_matching]`` for the laser odometry (configs/carmen_without_odometry.toml for orebro, which
 has no odometry records: ``slam_config``), as experiments/carmen_grid runs the grid filter. The graph
-makes no random draws: one run per log.
+makes no random draws (on orebro it starts from the grid filter's path, seeded by the config): one
+run per log.
 
 Run: ``python -m experiments.carmen_posegraph.run [--logs aces csail ...] [--jobs 1]``. Each log runs
 in a process of its own, so that its peak memory is its own. Results: results/table.csv and

@@ -20,10 +20,8 @@ import tempfile
 import time
 from pathlib import Path
 
-import numpy as np
 import pandas as pd
 
-from mazeslam.data import log, sidecars
 from mazeslam.data.loaded_run import load_run
 from mazeslam.evaluation.consistency import nees_summary
 from mazeslam.evaluation.metrics import absolute_trajectory_error, normalized_estimation_error
@@ -41,14 +39,6 @@ def row_for(seed: int) -> dict:
     """One simulated building log (noise seed ``seed``) through the pose graph, scored against its truth."""
     with tempfile.TemporaryDirectory() as folder:
         simulated = simulate_building_log(Path(folder) / "building.log", seed=seed)
-        sidecars.write_truth(sidecars.truth_path(simulated.path), log.read(simulated.path).times, simulated.truth)
-        sidecars.write_map(
-            sidecars.map_path(simulated.path),
-            np.empty((0, 4)),
-            np.empty((0, 2)),
-            simulated.geometry.to_dict(),
-            start_pose=simulated.start_pose.tolist(),
-        )
         run = load_run(simulated.path)
     began = time.process_time()
     result = laser_pose_graph(run, load_slam_config(CONFIG))

@@ -32,11 +32,18 @@ from mazeslam.registration.scan_matching import (
     scan_points,
 )
 
+#: Information added to a data term without a prior before inverting it (per unit: m^-2, rad^-2):
+#: a direction the scans do not fix gets a standard deviation of 1e6, which the ``max_sigma`` test
+#: refuses.
+UNINFORMED = 1e-12
 
-def posterior_covariance(information: np.ndarray, prior: np.ndarray, params: SequentialParams) -> np.ndarray:
+
+def posterior_covariance(information: np.ndarray, prior: np.ndarray | None, params: SequentialParams) -> np.ndarray:
     """``(H / variance_scale + P^-1)^-1 + floor^2 I`` (3, 3): a match's covariance from its data
-    term's Hessian ``information`` (3, 3) and its prior's covariance ``prior`` (3, 3)."""
-    covariance = np.linalg.inv(information / params.variance_scale + np.linalg.inv(prior))
+    term's Hessian ``information`` (3, 3) and its prior's covariance ``prior`` (3, 3); without a
+    prior (None), the data term's alone (``UNINFORMED`` where it fixes nothing)."""
+    prior_information = UNINFORMED * np.eye(3) if prior is None else np.linalg.inv(prior)
+    covariance = np.linalg.inv(information / params.variance_scale + prior_information)
     return 0.5 * (covariance + covariance.T) + params.floor**2 * np.eye(3)
 
 
