@@ -261,7 +261,8 @@ def optimum_key(sweep: Sweep, run: dict) -> str:
     """A stable name for a run's batch optimum: its log (``simulation_key``), the map kind and the slam
     settings the optimum uses: for corners all but the filters' particle counts and seeds, the grid
     filter's and the pose graph's settings (the core grid's three particle counts share one optimum
-    per noise setting and seed); for a grid all but the filters' (the pose graph's own)."""
+    per noise setting and seed); for a grid all but the filters' (the pose graph's own: a simulated
+    log has odometry, so its graph does not start from the grid filter's path, ``[posegraph] grid_start``)."""
     _, slam_config = configure(sweep, run["settings"])
     settings = dataclasses.asdict(slam_config)
     del settings["grid"], settings["map"]
