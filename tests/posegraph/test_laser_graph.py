@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 from conftest import PROJECT_ROOT, SHARED_DATA
 
-from mazeslam.data.loaded_run import load_run
+from mazeslam.data.loaded_run import LoadedRun, load_run
 from mazeslam.evaluation.metrics import absolute_trajectory_error
 from mazeslam.pipeline.config import SlamConfig
 from mazeslam.posegraph.graph import EdgeKind
@@ -21,6 +21,24 @@ from mazeslam.registration.scan_matching import ScanMatchParams
 from mazeslam.sim.building import simulate_building_log
 
 CONFIG = SlamConfig(scan_matching=ScanMatchParams(enabled=True))
+
+
+def first_scans_of(name: str, scans: int, folder) -> LoadedRun:
+    """The CARMEN log ``name`` imported into ``folder`` and loaded, up to its scan ``scans`` (its
+    records and truth before it too); the test skips, saying why, without the shared data."""
+    carmen = SHARED_DATA / "carmen" / f"{name}-corrected.log.gz"
+    if not carmen.exists():
+        pytest.skip(f"CARMEN log not found at {carmen} (the shared data folder is absent)")
+    from mazeslam.data.carmen import import_carmen
+
+    course = folder / f"{name}.log"
+    import_carmen(carmen, course)
+    run = load_run(course)
+    keep = np.arange(len(run.log)) <= np.flatnonzero(run.log.is_scan)[scans]
+    cut = dataclasses.replace(
+        run.log, times=run.log.times[keep], flags=run.log.flags[keep], values=run.log.values[keep]
+    )
+    return dataclasses.replace(run, log=cut, truth=run.truth[keep])
 
 
 def _building(folder, laps):
@@ -69,20 +87,7 @@ def test_without_loops_the_graph_is_the_odometry_chain_within_its_covariance(sho
 
 
 def test_the_first_scans_of_a_carmen_log_beat_the_laser_odometry(tmp_path):
-    carmen = SHARED_DATA / "carmen" / "freiburg-101-corrected.log.gz"
-    if not carmen.exists():
-        pytest.skip(f"CARMEN log not found at {carmen} (the shared data folder is absent)")
-    from mazeslam.data.carmen import import_carmen
-
-    course = tmp_path / "freiburg-101.log"
-    import_carmen(carmen, course)
-    run = load_run(course)
-    last = np.flatnonzero(run.log.is_scan)[60]  # about 180 s: round the building's corridor
-    keep = np.arange(len(run.log)) <= last
-    cut = dataclasses.replace(
-        run.log, times=run.log.times[keep], flags=run.log.flags[keep], values=run.log.values[keep]
-    )
-    run = dataclasses.replace(run, log=cut, truth=run.truth[keep])
+    run = first_scans_of("freiburg-101", 60, tmp_path)  # about 180 s: round the building's corridor
     result = laser_pose_graph(run, CONFIG)
     reference = run.truth[result.scan_records]
     ate = absolute_trajectory_error(result.poses, reference, align=True)["rmse"]
@@ -95,23 +100,14 @@ def test_the_blind_intervals_of_orebro_that_are_metres_off_are_found_ambiguous(t
     # orebro has no wheel odometry; by its reference poses the laser odometry is more than a metre
     # off at 5 of its first 40 intervals (17, 18, 26, 28, 36; experiments/carmen_grid/results/
     # orebro_checks.md): the ambiguity test finds 4 of them (not 26), and few others.
-    carmen = SHARED_DATA / "carmen" / "orebro-corrected.log.gz"
-    if not carmen.exists():
-        pytest.skip(f"CARMEN log not found at {carmen} (the shared data folder is absent)")
     from mazeslam.core.geometry import relative
-    from mazeslam.data.carmen import import_carmen
     from mazeslam.pipeline.config import load_slam_config
     from mazeslam.posegraph.laser_graph import ambiguous_intervals
     from mazeslam.posegraph.sequential import interval_priors, sequential_odometry
     from mazeslam.registration.scan_matching import scan_points
 
-    course = tmp_path / "orebro.log"
-    import_carmen(carmen, course)
-    run = load_run(course)
-    keep = np.arange(len(run.log)) <= np.flatnonzero(run.log.is_scan)[40]
-    cut = dataclasses.replace(
-        run.log, times=run.log.times[keep], flags=run.log.flags[keep], values=run.log.values[keep]
-    )
+    run = first_scans_of("orebro", 40, tmp_path)
+    cut = run.log
     scan_params, params = (
         load_slam_config(PROJECT_ROOT / "configs" / "carmen_without_odometry.toml").scan_matching,
         PoseGraphParams(),
