@@ -32,6 +32,16 @@ def compose(a, b):
     return np.stack([x, y, wrap_angle(a[..., 2] + b[..., 2])], axis=-1)
 
 
+def chained(start_pose, increments) -> np.ndarray:
+    """Poses (N + 1, 3): ``start_pose`` (3,), then after each of ``increments`` (N, 3), composed one by
+    one (``compose``), each in the frame of the pose before it."""
+    poses = np.empty((len(increments) + 1, 3))
+    poses[0] = start_pose
+    for index, increment in enumerate(increments):
+        poses[index + 1] = compose(poses[index], increment)
+    return poses
+
+
 def inverse(a):
     """SE(2) inverse ``⊖a``: the pose of the parent frame seen from ``a``. Shape ``(..., 3)``."""
     a = np.asarray(a, dtype=float)

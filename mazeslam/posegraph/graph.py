@@ -25,7 +25,6 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.sparse
 
-from mazeslam.core.geometry import compose
 from mazeslam.core.least_squares import block_entries, relative_pose_residual
 
 
@@ -146,12 +145,3 @@ def whitened_system(
     shape = (3 * len(graph), 3 * (graph.nodes - 1))
     jacobian = scipy.sparse.csr_array((values, (rows_, columns)), shape=shape)
     return np.einsum("eij,ej->ei", whitener, residual).ravel(), jacobian
-
-
-def chain_poses(start_pose, increments: np.ndarray) -> np.ndarray:
-    """Poses (S, 3): ``start_pose`` (3,) followed by ``increments`` (S-1, 3) composed one by one."""
-    poses = np.empty((len(increments) + 1, 3))
-    poses[0] = start_pose
-    for index, increment in enumerate(increments):
-        poses[index + 1] = compose(poses[index], increment)
-    return poses

@@ -29,7 +29,7 @@ import numpy as np
 
 from mazeslam.core.beams import BeamGeometry
 from mazeslam.core.config import require
-from mazeslam.core.geometry import advance_pose, compose, transform_points, wrap_angle
+from mazeslam.core.geometry import advance_pose, chained, transform_points, wrap_angle
 from mazeslam.core.motion import OdometryNoise
 from mazeslam.data.log import CourseLog
 from mazeslam.registration.correlative import CorrelativeParams, LikelihoodGrid, correlative_candidates
@@ -249,12 +249,7 @@ class LaserOdometry:
 
     def poses(self, start_pose) -> np.ndarray:
         """The increments chained from ``start_pose``: the pose (S, 3) of every scan, world frame."""
-        poses = np.empty((len(self.increments), 3))
-        pose = np.asarray(start_pose, dtype=float)
-        for index, increment in enumerate(self.increments):
-            pose = compose(pose, increment)
-            poses[index] = pose
-        return poses
+        return chained(start_pose, self.increments)[1:]
 
 
 def scan_points(ranges: np.ndarray, geometry: BeamGeometry, params: ScanMatchParams) -> np.ndarray:

@@ -6,8 +6,8 @@ kernel drops."""
 import numpy as np
 import pytest
 
-from mazeslam.core.geometry import compose, relative, wrap_angle
-from mazeslam.posegraph.graph import EdgeKind, PoseGraph, chain_poses, edge_residuals, whitened_system
+from mazeslam.core.geometry import chained, compose, relative, wrap_angle
+from mazeslam.posegraph.graph import EdgeKind, PoseGraph, edge_residuals, whitened_system
 from mazeslam.posegraph.solve import solve_graph
 
 
@@ -71,7 +71,7 @@ def test_a_graph_without_loops_is_the_odometry_chain_and_its_covariance_grows_as
     rng = np.random.default_rng(2)
     increments = np.column_stack([rng.uniform(0.2, 0.5, 30), rng.normal(0, 0.05, 30), rng.normal(0, 0.2, 30)])
     covariances = np.array([np.diag([0.02**2, 0.01**2, 0.01**2]) + 1e-5 * np.ones((3, 3)) for _ in increments])
-    chain = chain_poses([1.0, 2.0, 0.3], increments)
+    chain = chained([1.0, 2.0, 0.3], increments)
     graph = PoseGraph.of_edges(31, np.arange(30), np.arange(1, 31), increments, covariances, EdgeKind.SEQUENTIAL)
     start = chain + rng.normal(0, 0.05, chain.shape)
     start[0] = chain[0]
@@ -120,7 +120,7 @@ def _position_error(poses, truth):
 def test_a_true_closure_pulls_the_end_of_a_ring_back_to_its_start():
     rng = np.random.default_rng(3)
     truth, noisy, covariances = _corridor_ring(rng)
-    chain = chain_poses(truth[0], noisy)
+    chain = chained(truth[0], noisy)
     assert _position_error(chain, truth)[-1] > 1.0  # dead reckoning is metres off at the end
     closures = [(0, len(truth) - 1, relative(truth[0], truth[-1])), (2, len(truth) - 2, relative(truth[2], truth[-2]))]
     solution = solve_graph(_ring_graph(truth, noisy, covariances, closures), chain)
@@ -133,7 +133,7 @@ def test_a_true_closure_pulls_the_end_of_a_ring_back_to_its_start():
 def test_the_robust_solve_rejects_a_planted_false_closure_and_the_map_does_not_fold():
     rng = np.random.default_rng(4)
     truth, noisy, covariances = _corridor_ring(rng)
-    chain = chain_poses(truth[0], noisy)
+    chain = chained(truth[0], noisy)
     last = len(truth) - 1
     true = [(k, last - k, relative(truth[k], truth[last - k])) for k in range(0, 3)]
     # The false one: a scan half way round said to be where the scan a quarter round is (a
@@ -157,7 +157,7 @@ def test_the_robust_solve_rejects_a_planted_false_closure_and_the_map_does_not_f
 def test_the_solve_is_deterministic():
     rng = np.random.default_rng(5)
     truth, noisy, covariances = _corridor_ring(rng)
-    chain = chain_poses(truth[0], noisy)
+    chain = chained(truth[0], noisy)
     graph = _ring_graph(truth, noisy, covariances, [(0, len(truth) - 1, relative(truth[0], truth[-1]))])
     first, second = solve_graph(graph, chain), solve_graph(graph, chain)
     assert np.array_equal(first.poses, second.poses)
