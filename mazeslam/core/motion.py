@@ -25,7 +25,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from mazeslam.core.config import require
-from mazeslam.core.geometry import advance_pose, compose
+from mazeslam.core.geometry import advance_pose, compose, relative
 
 if TYPE_CHECKING:
     from mazeslam.data.log import CourseLog
@@ -111,3 +111,23 @@ def dead_reckoning(log: CourseLog, start_pose=(0.0, 0.0, 0.0), left_out=()) -> n
         pose = advance_pose(pose, distance, turn)
         poses[index] = pose
     return poses
+
+
+def carried_to_records(
+    scan_records: np.ndarray,
+    scan_poses: np.ndarray,
+    scan_covariances: np.ndarray,
+    reckoned: np.ndarray,
+    reckoned_start: np.ndarray,
+) -> tuple[np.ndarray, np.ndarray]:
+    """Poses (R, 3) and covariances (R, 3, 3) at every record from the poses (S, 3) and covariances
+    (S, 3, 3) at the scans, records ``scan_records`` (S,): a record gets the pose of the last scan at or
+    before it moved on by the odometry since, ``reckoned`` (R, 3) (the odometry at every record's time,
+    from ``reckoned_start`` (3,); the start pose moved so before the first scan, with zero
+    covariance), and the covariance of that scan. World frame, m and rad."""
+    anchor = np.searchsorted(scan_records, np.arange(len(reckoned)), side="right")  # 0: before any scan
+    start = np.asarray(reckoned_start, dtype=float)[None]
+    anchor_pose = np.vstack([start, scan_poses])[anchor]
+    anchor_reckoned = np.vstack([start, reckoned[scan_records]])[anchor]
+    covariances = np.concatenate([np.zeros((1, 3, 3)), scan_covariances])[anchor]
+    return compose(anchor_pose, relative(anchor_reckoned, reckoned)), covariances

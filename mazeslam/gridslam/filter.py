@@ -41,7 +41,7 @@ import numpy as np
 from mazeslam.core.beams import BeamGeometry
 from mazeslam.core.config import check_setting, require
 from mazeslam.core.geometry import advance_pose, compose, relative, wrap_angle
-from mazeslam.core.motion import OdometryNoise, dead_reckoning
+from mazeslam.core.motion import OdometryNoise, carried_to_records, dead_reckoning
 from mazeslam.core.resampling import effective_sample_size, normalized_weights, systematic_resample
 from mazeslam.data.log import CourseLog
 from mazeslam.gridslam.matching import DistanceMemo, LikelihoodField, MatchParams, match_points, match_pose, refine_pose
@@ -603,27 +603,6 @@ class GridSlamResult:
         ``sidecars.write_trajectory`` takes them (``carried_to_records``). ``which``: "best" or "mean"."""
         scan_poses = {"best": self.best_poses, "mean": self.mean_poses}[which]
         return carried_to_records(self.scan_records, scan_poses, self.covariances, self.reckoned, self.reckoned_start)
-
-
-def carried_to_records(
-    scan_records: np.ndarray,
-    scan_poses: np.ndarray,
-    scan_covariances: np.ndarray,
-    reckoned: np.ndarray,
-    reckoned_start: np.ndarray,
-) -> tuple[np.ndarray, np.ndarray]:
-    """Poses (R, 3) and covariances (R, 3, 3) at every record from the poses (S, 3) and covariances
-    (S, 3, 3) at the scans, records ``scan_records`` (S,): a record gets the pose of the last scan at or
-    before it moved on by the odometry since, ``reckoned`` (R, 3) (the odometry at every record's time,
-    from ``reckoned_start`` (3,); the start pose moved so before the first scan, with zero
-    covariance), and the covariance of that scan. World frame, m and rad."""
-    latest = np.searchsorted(scan_records, np.arange(len(reckoned)), side="right") - 1
-    scanned = latest[:, None] >= 0
-    anchor = np.where(scanned, scan_poses[np.maximum(latest, 0)], reckoned_start)
-    reckoned_anchor = np.where(scanned, reckoned[scan_records[np.maximum(latest, 0)]], reckoned_start)
-    poses = compose(anchor, relative(reckoned_anchor, reckoned))
-    covariances = np.where(latest[:, None, None] >= 0, scan_covariances[np.maximum(latest, 0)], 0.0)
-    return poses, covariances
 
 
 def odometry_at_record_times(course_log: CourseLog, start_pose) -> np.ndarray:

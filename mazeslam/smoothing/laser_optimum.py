@@ -16,8 +16,9 @@ from functools import cached_property
 
 import numpy as np
 
+from mazeslam.core.motion import carried_to_records
 from mazeslam.data.loaded_run import LoadedRun
-from mazeslam.gridslam.filter import carried_to_records, odometry_at_record_times
+from mazeslam.gridslam.filter import odometry_at_record_times
 from mazeslam.gridslam.known_poses import map_at_poses
 from mazeslam.gridslam.occupancy import TiledGrid, grid_states
 from mazeslam.pipeline.config import SlamConfig

@@ -28,14 +28,12 @@ import scipy.sparse
 import scipy.sparse.linalg
 
 from mazeslam.core.geometry import (
-    compose,
     polar_to_cartesian,
-    relative,
     transform_points,
     wrap_angle,
 )
 from mazeslam.core.least_squares import block_entries, relative_pose_residual
-from mazeslam.core.motion import dead_reckoning
+from mazeslam.core.motion import carried_to_records, dead_reckoning
 from mazeslam.data.log import CourseLog
 from mazeslam.fastslam import ekf
 from mazeslam.fastslam.filter import FastSLAMParams
@@ -375,12 +373,10 @@ def _moved(poses: np.ndarray, landmarks: np.ndarray, step: np.ndarray) -> tuple[
 def expand_to_records(course_log: CourseLog, result: SmoothingResult, start_pose=(0.0, 0.0, 0.0)) -> np.ndarray:
     """Poses (R, 3) at every record of ``course_log``, like FastSLAM's: each record's pose is the
     last scan pose at or before it (the start pose before the first scan) moved by the odometry
-    since then. World frame."""
-    reckoned = dead_reckoning(course_log, start_pose)
-    anchor = np.searchsorted(result.scan_records, np.arange(len(course_log)), side="right") - 1  # -1: before any scan
-    anchor_pose = np.vstack([np.asarray(start_pose, dtype=float), result.poses])[anchor + 1]
-    anchor_reckoned = np.vstack([np.asarray(start_pose, dtype=float), reckoned[result.scan_records]])[anchor + 1]
-    return compose(anchor_pose, relative(anchor_reckoned, reckoned))
+    since then (``carried_to_records``). World frame."""
+    start = np.asarray(start_pose, dtype=float)
+    reckoned = dead_reckoning(course_log, start)
+    return carried_to_records(result.scan_records, result.poses, result.pose_covariances, reckoned, start)[0]
 
 
 def smooth_known_association(
