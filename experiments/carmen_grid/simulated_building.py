@@ -36,7 +36,6 @@ from mazeslam.evaluation.consistency import nees_summary
 from mazeslam.evaluation.metrics import absolute_trajectory_error, normalized_estimation_error
 from mazeslam.gridslam import run_grid_slam
 from mazeslam.pipeline import load_slam_config
-from mazeslam.pipeline.grid_run import grid_params
 from mazeslam.sim.building import simulate_building_log
 
 HERE = Path(__file__).resolve().parent
@@ -49,7 +48,7 @@ def row_for(seed: int, motion_noise: OdometryNoise | None = None) -> dict:
     with tempfile.TemporaryDirectory() as folder:
         simulated = simulate_building_log(Path(folder) / "building.log", seed=seed)
         course_log = read(simulated.path)
-    params = grid_params(load_slam_config(CONFIG))
+    params = load_slam_config(CONFIG).grid_filter
     if motion_noise is not None:
         params = dataclasses.replace(params, motion_noise=motion_noise)
     began = time.process_time()

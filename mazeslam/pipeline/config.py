@@ -90,6 +90,14 @@ class SlamConfig:
         """The particle count of the filter ``[map] kind`` names."""
         return self.fastslam.NPARTICLES if self.map.kind == MapKind.LANDMARKS else self.grid.particles
 
+    @property
+    def grid_filter(self) -> GridSlamParams:
+        """The grid filter's settings as it runs: ``[grid]``, moving by ``[scan_matching]``'s laser
+        odometry when that is enabled."""
+        if self.scan_matching.enabled:
+            return replace(self.grid, laser_odometry=self.scan_matching)
+        return self.grid
+
     def with_sensor(self, overrides: SensorOverrides | None) -> SlamConfig:
         """These settings with the ``[sensor]`` values ``overrides`` gives (command-line beam geometry)
         over the config's; None keeps them."""

@@ -2,8 +2,6 @@
 
 from __future__ import annotations
 
-import dataclasses
-
 import numpy as np
 
 from mazeslam.core.limits import grid_map_problem
@@ -12,13 +10,6 @@ from mazeslam.data.loaded_run import LoadedRun
 from mazeslam.gridslam.filter import GridDivergence, GridSlamParams, run_grid_slam
 from mazeslam.pipeline.config import MapKind, SlamConfig
 from mazeslam.pipeline.result import SlamResult
-
-
-def grid_params(config: SlamConfig) -> GridSlamParams:
-    """``[grid]``, moving by ``[scan_matching]``'s laser odometry when that is enabled."""
-    if config.scan_matching.enabled:
-        return dataclasses.replace(config.grid, laser_odometry=config.scan_matching)
-    return config.grid
 
 
 def grid_on_run(
@@ -34,7 +25,7 @@ def grid_on_run(
     (``GridSlamResult.record_trajectory``); the scans are the ``estimated_records``."""
     tolerance = config.odometry.jump_tolerance
     moved_by = run.log_with_glitch_pairs_summed(tolerance)
-    params = grid_params(config)
+    params = config.grid_filter
     glitches = run.glitches(tolerance)
     reckoned = dead_reckoning(run.log, run.start_pose, glitches)
     _check_mappable(run, reckoned, glitches, params)

@@ -192,12 +192,12 @@ def ambiguous_intervals(
 
 
 def grid_filter_path(run: LoadedRun, config: SlamConfig, scan_records: np.ndarray) -> np.ndarray:
-    """The grid filter's final best path (S, 3) at ``scan_records`` with ``config``'s ``[grid]`` and
-    ``[scan_matching]`` (as ``mazeslam slam`` runs it): the first estimate of a log without odometry."""
+    """The grid filter's final best path (S, 3) at ``scan_records`` with ``config``'s settings for it
+    (``SlamConfig.grid_filter``, as ``mazeslam slam`` runs it): the first estimate of a log without odometry."""
     from mazeslam.gridslam.filter import run_grid_slam
 
-    grid_params = dataclasses.replace(config.grid, laser_odometry=config.scan_matching)
-    grid = run_grid_slam(run.log, run.geometry, run.start_pose, grid_params, sensor_max_range=run.sensor_max_range)
+    params = config.grid_filter
+    grid = run_grid_slam(run.log, run.geometry, run.start_pose, params, sensor_max_range=run.sensor_max_range)
     where = np.searchsorted(grid.scan_records, scan_records)
     assert np.array_equal(grid.scan_records[where], scan_records)
     return grid.best_poses[where]
