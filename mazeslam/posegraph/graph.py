@@ -72,8 +72,9 @@ class PoseGraph:
         return cls(nodes, np.zeros(0, int), np.zeros(0, int), np.zeros((0, 3)), np.zeros((0, 3, 3)), np.zeros(0, int))
 
     @classmethod
-    def of_edges(cls, nodes: int, i, j, measured, covariances, kind: EdgeKind) -> PoseGraph:
-        """A graph of edges of one ``kind`` given with covariances (E, 3, 3) rather than information."""
+    def of_edges(cls, nodes: int, i, j, measured, covariances, kind) -> PoseGraph:
+        """A graph of edges given with covariances (E, 3, 3) rather than information; ``kind`` one
+        ``EdgeKind`` for every edge, or one per edge (E,)."""
         covariances = np.asarray(covariances, dtype=float).reshape(-1, 3, 3)
         return cls(
             nodes,
@@ -81,7 +82,7 @@ class PoseGraph:
             np.asarray(j, dtype=int).reshape(-1),
             np.asarray(measured, dtype=float).reshape(-1, 3),
             np.linalg.inv(covariances) if len(covariances) else np.zeros((0, 3, 3)),
-            np.full(len(covariances), int(kind)),
+            np.broadcast_to(np.asarray(kind, dtype=int), (len(covariances),)).copy(),
         )
 
     def __add__(self, other: PoseGraph) -> PoseGraph:

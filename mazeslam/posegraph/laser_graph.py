@@ -117,8 +117,7 @@ def sequential_graph(
     nodes = np.arange(1, count)
     blind = np.zeros(count, bool) if blind is None else np.asarray(blind, bool)
     kinds = np.where(blind[1:], int(EdgeKind.BLIND), int(EdgeKind.SEQUENTIAL))
-    chain = PoseGraph.of_edges(count, nodes - 1, nodes, increments[1:], covariances[1:], EdgeKind.SEQUENTIAL)
-    graph = PoseGraph(count, chain.i, chain.j, chain.measured, chain.information, kinds)
+    graph = PoseGraph.of_edges(count, nodes - 1, nodes, increments[1:], covariances[1:], kinds)
     if blind[1:].any():
         assert priors is not None and prior_covariances is not None
         where = nodes[blind[1:]]
@@ -322,5 +321,4 @@ def _matched_edges(
         measured.append(match.pose)
         covariances.append(match.covariance)
         kinds.append(int(kind))
-    found = PoseGraph.of_edges(len(poses), anchors, queries, measured, covariances, EdgeKind.CLOSURE)
-    return PoseGraph(found.nodes, found.i, found.j, found.measured, found.information, np.asarray(kinds, dtype=int))
+    return PoseGraph.of_edges(len(poses), anchors, queries, measured, covariances, np.asarray(kinds, dtype=int))
