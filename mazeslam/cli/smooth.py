@@ -24,7 +24,6 @@ odometry records the filter leaves out as glitches (``[odometry] jump_tolerance`
 from __future__ import annotations
 
 import dataclasses
-import json
 from pathlib import Path
 
 import click
@@ -34,9 +33,8 @@ from mazeslam.cli.options import beam_geometry_options, geometry_overrides
 from mazeslam.cli.run_folders import SMOOTH_FILES, check_same_log, default_out_dir, output_folder
 from mazeslam.cli.smooth_laser import laser_smooth_lines
 from mazeslam.core.beams import SensorOverrides
-from mazeslam.core.config import jsonable
 from mazeslam.core.motion import dead_reckoning
-from mazeslam.core.outputs import staged_outputs, write_file
+from mazeslam.core.outputs import staged_outputs, write_json
 from mazeslam.data import sidecars
 from mazeslam.data.beam_detection import with_detected_convention
 from mazeslam.data.loaded_run import LoadedRun, load_run
@@ -215,7 +213,7 @@ def _write_outputs(out_dir: Path, run: LoadedRun, config: SlamConfig, smoothed: 
     paths = {"trajectory": out_dir / "trajectory.csv", "tum": out_dir / "trajectory.tum", "map": out_dir / "map.json"}
     sidecars.write_trajectory(paths["trajectory"], run.log.times, smoothed.poses, smoothed.covariances)
     sidecars.write_tum(paths["tum"], run.log.times, smoothed.poses)
-    write_file(paths["map"], json.dumps(jsonable(document), indent=1, allow_nan=False) + "\n")
+    write_json(paths["map"], document)
     points = scan_points_world(
         run.log, smoothed.poses, run.geometry, config.corners.min_range, config.corners.max_range
     )

@@ -4,15 +4,13 @@ the lines it prints and the files it writes (``mazeslam.cli.smooth`` dispatches 
 from __future__ import annotations
 
 import dataclasses
-import json
 from pathlib import Path
 
 import numpy as np
 
 from mazeslam.cli.run_folders import SMOOTH_FILES
-from mazeslam.core.config import jsonable
 from mazeslam.core.motion import dead_reckoning
-from mazeslam.core.outputs import staged_outputs, write_file
+from mazeslam.core.outputs import staged_outputs, write_json
 from mazeslam.data import sidecars
 from mazeslam.data.beam_detection import with_detected_convention
 from mazeslam.data.loaded_run import LoadedRun, load_run
@@ -144,10 +142,7 @@ def _write_outputs(out_dir: Path, run: LoadedRun, smoothed: LaserSmoothed, docum
     sidecars.write_trajectory(paths["trajectory"], run.log.times, smoothed.poses, smoothed.covariances)
     sidecars.write_tum(paths["tum"], run.log.times, smoothed.poses)
     paths["occupancy"] = write_map(smoothed.occupancy, out_dir)
-    write_file(
-        paths["map"],
-        json.dumps(jsonable({**document, "occupancy": paths["occupancy"].name}), indent=1, allow_nan=False) + "\n",
-    )
+    write_json(paths["map"], {**document, "occupancy": paths["occupancy"].name})
     result = smoothed.graph
     reference = None if run.truth is None else run.truth[result.scan_records]
     title = f"{run.path.name}: pose graph, {len(result.poses)} scans, chi2/dof {result.solution.chi2_per_dof:.2f}"

@@ -11,6 +11,7 @@ is written (``staged_outputs``): a failed or interrupted run leaves the folder a
 from __future__ import annotations
 
 import contextlib
+import json
 import os
 import secrets
 import shutil
@@ -151,6 +152,14 @@ def write_file(path: str | Path, content: str | bytes) -> Path:
         else:
             temporary.write_bytes(content)
     return Path(path)
+
+
+def write_json(path: str | Path, document: dict) -> Path:
+    """Write ``document`` to ``path`` as strict JSON (``jsonable``: numpy values as plain ones; NaN
+    and infinities refused), one space of indent, whole or not at all (``write_file``)."""
+    from mazeslam.core.config import jsonable
+
+    return write_file(path, json.dumps(jsonable(document), indent=1, allow_nan=False) + "\n")
 
 
 def clear_outputs(folder: str | Path, patterns: tuple[str, ...], keep: frozenset[str] = frozenset()) -> list[Path]:

@@ -10,14 +10,12 @@ and animations are drawn by ``mazeslam.viz``.
 
 from __future__ import annotations
 
-import json
 from pathlib import Path
 from typing import TYPE_CHECKING
 
 import numpy as np
 
-from mazeslam.core.config import jsonable
-from mazeslam.core.outputs import write_file
+from mazeslam.core.outputs import write_json
 from mazeslam.data import sidecars
 
 if TYPE_CHECKING:
@@ -90,5 +88,5 @@ def write_outputs(out_dir, result: SlamResult, extra: dict) -> dict[str, Path]:
             landmarks=result.landmarks.round(6).tolist(), landmark_covariances=result.landmark_covariances.tolist()
         )
     document.update(extra)
-    write_file(paths["map"], json.dumps(jsonable(document), indent=1, allow_nan=False) + "\n")
+    write_json(paths["map"], document)
     return paths
