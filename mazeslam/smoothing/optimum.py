@@ -158,9 +158,17 @@ def smoothed_poses(run: LoadedRun, folder: str | Path) -> np.ndarray | None:
         raise ValueError(f"{document}: not the map.json of a `mazeslam smooth` run (no 'source')") from error
     if Path(source).resolve() != run.path.resolve():
         raise ValueError(f"{folder}: the smooth run of {source}, not of {run.path}")
+    return _poses_of_every_record(run, trajectory)
+
+
+def _poses_of_every_record(run: LoadedRun, trajectory: Path) -> np.ndarray:
+    """The poses (R, 3) of the trajectory CSV ``trajectory``, one per record of ``run``'s log (an
+    error naming it when the count differs: a run of another log)."""
     poses = sidecars.read_trajectory(trajectory)[1]
     if len(poses) != len(run.log):
-        raise ValueError(f"{trajectory}: {len(poses)} poses for the {len(run.log)} records of {run.path}")
+        raise ValueError(
+            f"{trajectory}: {len(poses)} poses for the {len(run.log)} records of {run.path}: a run of another log?"
+        )
     return poses
 
 
@@ -172,11 +180,7 @@ def from_run_identities(run: LoadedRun, run_dir: str | Path, radius: float):
     missing = [str(p) for p in paths if not p.exists()]
     if missing:
         raise ValueError(f"{run_dir}: not a `mazeslam slam` output folder, missing {', '.join(missing)}")
-    poses = sidecars.read_trajectory(paths[0])[1]
-    if len(poses) != len(run.log):
-        raise ValueError(
-            f"{paths[0]}: {len(poses)} poses for the {len(run.log)} records of {run.path}: a run of another log?"
-        )
+    poses = _poses_of_every_record(run, paths[0])
     try:
         landmarks = np.asarray(json.loads(read_text(paths[1], "map"))["landmarks"], dtype=float).reshape(-1, 2)
     except (json.JSONDecodeError, KeyError, TypeError, ValueError) as error:
