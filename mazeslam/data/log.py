@@ -160,6 +160,11 @@ class CourseLog:
     def is_landmark(self) -> np.ndarray:
         return self.flags == LANDMARK
 
+    @property
+    def scans_only(self) -> bool:
+        """The log has scans and no landmark records: what laser odometry and the smoothers take."""
+        return bool(self.is_scan.any()) and not self.is_landmark.any()
+
     def records(self) -> Iterator[OdometryRecord | ScanRecord | LandmarkRecord]:
         """The records in order, as ``OdometryRecord``, ``ScanRecord`` or ``LandmarkRecord``."""
         for index, (t, flag, row) in enumerate(zip(self.times, self.flags, self.values)):

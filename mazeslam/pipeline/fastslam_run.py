@@ -201,7 +201,7 @@ def fastslam_on_run(
     given (it does not depend on the filter's seed, so runs over several seeds can share it), else
     matched here; without it, ``laser`` is not used."""
     course_log = run.log
-    if config.scan_matching.enabled and (not course_log.is_scan.any() or course_log.is_landmark.any()):
+    if config.scan_matching.enabled and not course_log.scans_only:
         raise ValueError(
             f"{run.path}: [scan_matching] needs a log of scans (laser odometry moves the filter scan to "
             "scan); this one has landmark records or no scans: turn it off"

@@ -52,12 +52,12 @@ class LaserSmoothed:
 
 def has_laser_optimum(run: LoadedRun) -> bool:
     """The run's pose graph can be built and scored: truth beside a log of scans, no landmark records."""
-    return run.truth is not None and bool(run.log.is_scan.any()) and not run.log.is_landmark.any()
+    return run.truth is not None and run.log.scans_only
 
 
 def smooth_laser_run(run: LoadedRun, config: SlamConfig) -> LaserSmoothed:
     """The pose graph of ``run``'s scans with ``config``'s settings (see the module docstring)."""
-    if not run.log.is_scan.any() or run.log.is_landmark.any():
+    if not run.log.scans_only:
         raise ValueError(f"{run.path}: the pose graph needs a log of scans (and no landmark records)")
     began = time.perf_counter()
     course_log = run.log_with_glitch_pairs_summed(config.odometry.jump_tolerance)

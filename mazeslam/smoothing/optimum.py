@@ -55,7 +55,7 @@ class Smoothed:
 def smooth_run(run: LoadedRun, config: SlamConfig, identify) -> Smoothed:
     """The optimum of ``run``'s scans with ``identify(record_index, observations (K, 2)) -> ids (K,)``
     naming the corners (-1: left out), the filter's noise (``config.fastslam``) and corners (``config.corners``)."""
-    if not run.log.is_scan.any() or run.log.is_landmark.any():
+    if not run.log.scans_only:
         raise ValueError(f"{run.path}: the smoother needs a log of scans (and no landmark records)")
     started = time.perf_counter()
     course_log = run.log_without_glitches(config.odometry.jump_tolerance)
@@ -69,12 +69,7 @@ def smooth_run(run: LoadedRun, config: SlamConfig, identify) -> Smoothed:
 
 def has_known_optimum(run: LoadedRun) -> bool:
     """The run can be smoothed with known association: truth, true corners and a log of scans."""
-    return (
-        run.truth is not None
-        and len(run.true_corners) > 0
-        and bool(run.log.is_scan.any())
-        and not run.log.is_landmark.any()
-    )
+    return run.truth is not None and len(run.true_corners) > 0 and run.log.scans_only
 
 
 def known_optimum(run: LoadedRun, config: SlamConfig) -> Smoothed:
