@@ -40,7 +40,7 @@ from mazeslam.posegraph.closures import (
 )
 from mazeslam.posegraph.graph import EdgeKind, PoseGraph
 from mazeslam.posegraph.params import PoseGraphParams
-from mazeslam.posegraph.sequential import interval_priors, sequential_odometry
+from mazeslam.posegraph.sequential import sequential_odometry
 from mazeslam.posegraph.solve import GraphSolution, solve_graph
 from mazeslam.registration.scan_matching import ReferenceScan, ScanMatchParams, scan_points
 
@@ -135,11 +135,9 @@ def laser_pose_graph(run: LoadedRun, config: SlamConfig, params: PoseGraphParams
     odometry, covariances = sequential_odometry(run.log, run.geometry, scan_params, params.sequential)
     chain = odometry.poses(run.start_pose)
     points = [scan_points(run.log.values[record], run.geometry, scan_params) for record in odometry.scan_records]
-    # The constant-velocity prior of a blind interval: the motion before it (none before the first).
-    priors = np.vstack([np.zeros((2, 3)), odometry.increments[1:-1]])[: len(chain)]
+    priors, prior_covariances = odometry.priors(scan_params)  # a blind interval's: constant velocity
     blind = ~odometry.had_odometry
     blind[0] = False
-    prior_covariances = interval_priors(odometry, scan_params)
     sequential = sequential_graph(odometry.increments, covariances, blind, priors, prior_covariances)
     ambiguous = ambiguous_intervals(points, odometry.increments, prior_covariances, blind, scan_params, params)
     if ambiguous.any():  # the blind edges are the first S - 1; their constant-velocity priors stay

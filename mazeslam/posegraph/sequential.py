@@ -28,7 +28,6 @@ from mazeslam.registration.scan_matching import (
     ScanMatchParams,
     laser_odometry,
     match_information,
-    odometry_prior_covariance,
     scan_points,
 )
 
@@ -47,19 +46,6 @@ def posterior_covariance(information: np.ndarray, prior: np.ndarray | None, para
     return 0.5 * (covariance + covariance.T) + params.floor**2 * np.eye(3)
 
 
-def interval_priors(odometry: LaserOdometry, params: ScanMatchParams) -> np.ndarray:
-    """The covariance (S, 3, 3) of the motion prior each interval's match had (the first: the wheels'
-    from the start), as ``laser_odometry`` sets it: the wheels' under ``odometry_prior`` where the log
-    has odometry, else the constant-velocity prior (``blind_sigma_xy``, ``blind_sigma_th``)."""
-    blind = np.diag([params.blind_sigma_xy**2, params.blind_sigma_xy**2, params.blind_sigma_th**2])
-    return np.array(
-        [
-            odometry_prior_covariance(wheel, params) if had else blind
-            for wheel, had in zip(odometry.wheel_increments, odometry.had_odometry)
-        ]
-    ).reshape(-1, 3, 3)
-
-
 def match_covariances(
     course_log: CourseLog,
     geometry: BeamGeometry,
@@ -69,7 +55,7 @@ def match_covariances(
 ) -> np.ndarray:
     """The covariance (S, 3, 3) of each interval of ``odometry`` (module docstring): index k is the
     motion from scan k-1 to scan k in scan k-1's robot frame; index 0 (from the start) the prior's."""
-    priors = interval_priors(odometry, scan_params)
+    priors = odometry.priors(scan_params)[1]
     covariances = priors + params.floor**2 * np.eye(3)
     reference = None
     for index, record in enumerate(odometry.scan_records):

@@ -251,6 +251,16 @@ class LaserOdometry:
         """The increments chained from ``start_pose``: the pose (S, 3) of every scan, world frame."""
         return chained(start_pose, self.increments)[1:]
 
+    def priors(self, params: ScanMatchParams) -> tuple[np.ndarray, np.ndarray]:
+        """The motion prior (S, 3) and its covariance (S, 3, 3) each interval's match had with
+        ``params`` (``motion_prior``; the first interval's, from the start, as it would have)."""
+        previous = [None, None, *self.increments[1:-1]]  # the motion before each interval, matched
+        pairs = [
+            motion_prior(wheel, had, before, params)
+            for wheel, had, before in zip(self.wheel_increments, self.had_odometry, previous)
+        ]
+        return np.array([p for p, _ in pairs]).reshape(-1, 3), np.array([c for _, c in pairs]).reshape(-1, 3, 3)
+
 
 def scan_points(ranges: np.ndarray, geometry: BeamGeometry, params: ScanMatchParams) -> np.ndarray:
     """A scan's returns within the range limits as points (K, 2) in the robot frame, metres."""
@@ -272,6 +282,18 @@ def odometry_prior_covariance(motion: np.ndarray, params: ScanMatchParams) -> np
     """Covariance (3, 3) of a wheel-odometry motion (dx, dy, dtheta) under the prior's noise
     (``OdometryNoise.relative_covariance``), at least ``prior_floor`` in each term."""
     return params.odometry_prior.relative_covariance(motion) + params.prior_floor**2 * np.eye(3)
+
+
+def motion_prior(
+    wheel: np.ndarray, has_odometry: bool, previous_motion: np.ndarray | None, params: ScanMatchParams
+) -> tuple[np.ndarray, np.ndarray]:
+    """The prior (3,) of an interval's match and its covariance (3, 3): the wheels' motion ``wheel``
+    under ``odometry_prior`` where the log has odometry for the interval, else the motion before it
+    (``previous_motion``: constant velocity; none before the first) with the ``blind_sigma_*``."""
+    if has_odometry:
+        return wheel, odometry_prior_covariance(wheel, params)
+    prior = previous_motion if previous_motion is not None else np.zeros(3)
+    return prior, np.diag([params.blind_sigma_xy**2, params.blind_sigma_xy**2, params.blind_sigma_th**2])
 
 
 def laser_odometry(course_log: CourseLog, geometry: BeamGeometry, params: ScanMatchParams) -> LaserOdometry:
@@ -304,11 +326,7 @@ def _interval(
     params: ScanMatchParams,
 ) -> tuple[np.ndarray, bool, float]:
     """The increment of one interval, whether its match was accepted, and the match's overlap."""
-    if has_odometry:
-        prior, covariance = wheel, odometry_prior_covariance(wheel, params)
-    else:
-        prior = previous_motion if previous_motion is not None else np.zeros(3)
-        covariance = np.diag([params.blind_sigma_xy**2, params.blind_sigma_xy**2, params.blind_sigma_th**2])
+    prior, covariance = motion_prior(wheel, has_odometry, previous_motion, params)
     if reference is None or len(points) < params.neighbours:
         return prior, False, 0.0
     best = match_scan(reference, points, prior, covariance, params)

@@ -103,7 +103,7 @@ def test_the_blind_intervals_of_orebro_that_are_metres_off_are_found_ambiguous(t
     from mazeslam.core.geometry import relative
     from mazeslam.pipeline.config import load_slam_config
     from mazeslam.posegraph.laser_graph import ambiguous_intervals
-    from mazeslam.posegraph.sequential import interval_priors, sequential_odometry
+    from mazeslam.posegraph.sequential import sequential_odometry
     from mazeslam.registration.scan_matching import scan_points
 
     run = first_scans_of("orebro", 40, tmp_path)
@@ -117,7 +117,7 @@ def test_the_blind_intervals_of_orebro_that_are_metres_off_are_found_ambiguous(t
     blind = ~odometry.had_odometry
     blind[0] = False
     found = ambiguous_intervals(
-        points, odometry.increments, interval_priors(odometry, scan_params), blind, scan_params, params
+        points, odometry.increments, odometry.priors(scan_params)[1], blind, scan_params, params
     )
     reference = run.truth[odometry.scan_records]
     off = np.array(
