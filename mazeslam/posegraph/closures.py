@@ -183,18 +183,27 @@ def match_to_submap(
 
 
 def chain_window(cumulative: np.ndarray, path: np.ndarray, first: int, last: int, params: ClosureParams) -> np.ndarray:
-    """The search window's covariance (3, 3) between scans ``first`` < ``last``: from ``cumulative``
-    (S, 2), the sequential edges' position (mean of x and y) and heading variances summed from the
-    first scan, and ``path`` (S,) the path lengths: position variance the summed one plus the
-    heading's spread swinging the path between them (``L^2 var_theta / 3``), bounded by
-    ``min_window`` and ``max_window``."""
-    position, heading = cumulative[last] - cumulative[first]
-    length = path[last] - path[first]
-    sigma_xy = math.sqrt(max(position + length**2 * heading / 3.0, 0.0))
-    sigma_th = math.sqrt(max(heading, 0.0))
-    sigma_xy = min(max(sigma_xy, params.min_window[0]), params.max_window[0])
-    sigma_th = min(max(sigma_th, params.min_window[1]), params.max_window[1])
-    return np.diag([sigma_xy**2, sigma_xy**2, sigma_th**2])
+    """The search window's covariance (3, 3) between scans ``first`` < ``last`` (``chain_sigmas``)."""
+    sigma_xy, sigma_th = chain_sigmas(cumulative, path, np.array([first]), last, params)
+    return np.diag([sigma_xy[0] ** 2, sigma_xy[0] ** 2, sigma_th[0] ** 2])
+
+
+def chain_sigmas(
+    cumulative: np.ndarray, path: np.ndarray, firsts: np.ndarray, last: int, params: ClosureParams
+) -> tuple[np.ndarray, np.ndarray]:
+    """The search windows' standard deviations in position (m) and heading (rad), each (N,), between
+    each of scans ``firsts`` (N,) and scan ``last``: from ``cumulative`` (S, 2), the sequential
+    edges' position (mean of x and y) and heading variances summed from the first scan, and ``path``
+    (S,) the path lengths: position variance the summed one plus the heading's spread swinging the
+    path between them (``L^2 var_theta / 3``), bounded by ``min_window`` and ``max_window``."""
+    position = cumulative[last, 0] - cumulative[firsts, 0]
+    heading = cumulative[last, 1] - cumulative[firsts, 1]
+    length = path[last] - path[firsts]
+    sigma_xy = np.sqrt(np.maximum(position + length**2 * heading / 3.0, 0.0))
+    sigma_th = np.sqrt(np.maximum(heading, 0.0))
+    sigma_xy = np.minimum(np.maximum(sigma_xy, params.min_window[0]), params.max_window[0])
+    sigma_th = np.minimum(np.maximum(sigma_th, params.min_window[1]), params.max_window[1])
+    return sigma_xy, sigma_th
 
 
 def candidate_pairs(
@@ -214,7 +223,7 @@ def candidate_pairs(
         if not len(far):
             continue
         distance = np.hypot(*(poses[far, :2] - poses[query, :2]).T)
-        reach = np.array([3.0 * math.sqrt(chain_window(cumulative, path, a, query, params)[0, 0]) for a in far])
+        reach = 3.0 * np.sqrt(chain_sigmas(cumulative, path, far, query, params)[0] ** 2)  # as chain_window's
         near = distance <= params.search_radius + reach
         if not near.any():
             continue
