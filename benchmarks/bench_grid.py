@@ -42,7 +42,7 @@ from bench_command import children_cpu  # noqa: E402  (CPU of finished child pro
 from reference_grid_filter import ReferenceGridSlam  # noqa: E402
 
 from mazeslam.core.config import with_settings  # noqa: E402
-from mazeslam.data.beam_detection import with_detected_convention  # noqa: E402
+from mazeslam.data.beam_detection import loaded_with_convention  # noqa: E402
 from mazeslam.data.carmen import import_carmen  # noqa: E402
 from mazeslam.data.loaded_run import LoadedRun, load_run  # noqa: E402
 from mazeslam.gridslam import filter as grid_filter  # noqa: E402
@@ -90,7 +90,7 @@ def per_particle_scan(run: LoadedRun, config: SlamConfig, slam_type) -> float:
 
 def loaded(path: Path, config: SlamConfig) -> LoadedRun:
     """The log at ``path`` as the slam command loads it (its beam convention detected)."""
-    return with_detected_convention(load_run(path, config.sensor), config)
+    return loaded_with_convention(path, config)
 
 
 def first_scans(run: LoadedRun, scans: int) -> LoadedRun:

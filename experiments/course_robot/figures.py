@@ -20,7 +20,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
 from mazeslam.core.config import with_settings  # noqa: E402
-from mazeslam.data.beam_detection import with_detected_convention  # noqa: E402
+from mazeslam.data.beam_detection import loaded_with_convention  # noqa: E402
 from mazeslam.data.loaded_run import LoadedRun, load_run  # noqa: E402
 from mazeslam.data.scans import scan_points_world  # noqa: E402
 from mazeslam.evaluation.metrics import absolute_trajectory_error  # noqa: E402
@@ -86,7 +86,7 @@ def main() -> None:
     config = load_slam_config(COURSE)
     IMAGES.mkdir(parents=True, exist_ok=True)
     if LOG1.exists():
-        run = with_detected_convention(load_run(LOG1, config.sensor), config)
+        run = loaded_with_convention(LOG1, config)
         print(
             draw(
                 run,

@@ -24,7 +24,7 @@ import numpy as np
 import pandas as pd
 
 from mazeslam.core.config import with_settings
-from mazeslam.data.beam_detection import with_detected_convention
+from mazeslam.data.beam_detection import loaded_with_convention
 from mazeslam.data.loaded_run import LoadedRun, load_run
 from mazeslam.evaluation.consistency import nees_summary
 from mazeslam.evaluation.metrics import absolute_trajectory_error, normalized_estimation_error
@@ -111,7 +111,7 @@ def main() -> None:
     PARTIAL.unlink(missing_ok=True)
     rows = []
     if LOG1.exists():
-        run = with_detected_convention(load_run(LOG1, config.sensor), config)
+        run = loaded_with_convention(LOG1, config)
         rows += rows_for(run, config, "log1", FILTER_SEEDS)
     else:
         print(f"{LOG1} is absent: log1 left out", file=sys.stderr)

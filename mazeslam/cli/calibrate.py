@@ -33,15 +33,14 @@ def calibrate(log_files, config_path, write_path, first_beam_angle, beam_directi
     Several logs (one robot's, one dataset's) give one setting for them all, every noise fitted
     over all of them together."""
     from mazeslam.calibration.noise import calibrate_logs
-    from mazeslam.data.beam_detection import with_detected_convention
-    from mazeslam.data.loaded_run import load_run
+    from mazeslam.data.beam_detection import loaded_with_convention
     from mazeslam.pipeline import load_slam_config
 
     if write_path:
         prepare_output_file(write_path)
     config = load_slam_config(config_path)
     config = config.with_sensor(geometry_overrides(first_beam_angle, beam_direction, mount_x))
-    runs = [with_detected_convention(load_run(log_file, config.sensor), config) for log_file in log_files]
+    runs = [loaded_with_convention(log_file, config) for log_file in log_files]
     try:
         lines = calibrate_logs(runs, config, progress=not quiet).settings()
     except ValueError as error:

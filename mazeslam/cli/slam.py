@@ -22,8 +22,8 @@ from mazeslam.cli.side_process import SideProcess
 from mazeslam.core.beams import SensorOverrides
 from mazeslam.core.config import with_settings
 from mazeslam.core.outputs import staged_outputs
-from mazeslam.data.beam_detection import convention_given, convention_warning, with_detected_convention
-from mazeslam.data.loaded_run import LoadedRun, load_run
+from mazeslam.data.beam_detection import convention_given, convention_warning, loaded_with_convention
+from mazeslam.data.loaded_run import LoadedRun
 from mazeslam.evaluation.consistency import EXPLANATION, MOTION_EXPLANATION, POSE_BOUND_95, summarise, summary_words
 from mazeslam.evaluation.scoring import RPE_DISTANCE, score_run
 from mazeslam.evaluation.sharpness import paths_sharpness, sharpness_lines
@@ -210,8 +210,7 @@ def run_slam_command(
     changes.update({"grid.particles": filter_changes.get("NPARTICLES"), "grid.seed": filter_changes.get("seed")})
     config = with_settings(config, changes)
     config = config.with_sensor(sensor)
-    run = load_run(log_file, config.sensor)
-    run = with_detected_convention(run, config, cache_folder=Path(out_dir))
+    run = loaded_with_convention(log_file, config, cache_folder=Path(out_dir))
     notes = [note for note in [chosen, _given_convention_warning(run, config), _blind_motion_note(run, config)] if note]
     grid = config.map.kind == MapKind.GRID
     unused = [f"--{name}" for name in ("association", "version") if filter_changes.get(name) is not None]

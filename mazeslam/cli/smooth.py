@@ -36,8 +36,8 @@ from mazeslam.core.beams import SensorOverrides
 from mazeslam.core.motion import dead_reckoning
 from mazeslam.core.outputs import staged_outputs, write_json
 from mazeslam.data import sidecars
-from mazeslam.data.beam_detection import with_detected_convention
-from mazeslam.data.loaded_run import LoadedRun, load_run
+from mazeslam.data.beam_detection import loaded_with_convention
+from mazeslam.data.loaded_run import LoadedRun
 from mazeslam.data.scans import scan_points_world
 from mazeslam.evaluation.consistency import POSE_BOUND_95, nees_summary, summary_words
 from mazeslam.evaluation.metrics import align_se2, apply_se2, map_error, normalized_estimation_error
@@ -118,11 +118,10 @@ def run_smooth_command(
         say(chosen)
         chosen = None
     config = config.with_sensor(sensor)
+    run = loaded_with_convention(log_file, config, cache_folder=Path(out_dir))
     if config.map.kind == MapKind.GRID and association is None:
-        return [line for line in [chosen] if line] + laser_smooth_lines(log_file, config, Path(out_dir))
+        return [line for line in [chosen] if line] + laser_smooth_lines(run, config, Path(out_dir))
     association = association or "known"
-    run = load_run(log_file, config.sensor)
-    run = with_detected_convention(run, config, cache_folder=Path(out_dir))
     radius = config.evaluation.match_radius
     if association == "known":
         if run.truth is None or not len(run.true_corners):

@@ -12,8 +12,7 @@ from mazeslam.cli.run_folders import SMOOTH_FILES
 from mazeslam.core.motion import dead_reckoning
 from mazeslam.core.outputs import staged_outputs, write_json
 from mazeslam.data import sidecars
-from mazeslam.data.beam_detection import with_detected_convention
-from mazeslam.data.loaded_run import LoadedRun, load_run
+from mazeslam.data.loaded_run import LoadedRun
 from mazeslam.data.map_io import write_map
 from mazeslam.evaluation.consistency import POSE_BOUND_95, nees_summary, summary_words
 from mazeslam.evaluation.metrics import normalized_estimation_error
@@ -27,12 +26,10 @@ from mazeslam.smoothing.optimum import OPTIMUM
 LASER_ODOMETRY = "laser odometry"
 
 
-def laser_smooth_lines(log_file, config: SlamConfig, out_dir: Path) -> list[str]:
-    """Build and solve ``log_file``'s pose graph with ``config``, write ``out_dir``/{trajectory.csv,
-    trajectory.tum, map.json, occupancy.pgm/.yaml, smooth.png} (replacing the last run's files once all
-    are written: ``staged_outputs``); return the lines to print."""
-    run = load_run(log_file, config.sensor)
-    run = with_detected_convention(run, config, cache_folder=Path(out_dir))
+def laser_smooth_lines(run: LoadedRun, config: SlamConfig, out_dir: Path) -> list[str]:
+    """Build and solve the pose graph of the loaded log ``run`` with ``config``, write
+    ``out_dir``/{trajectory.csv, trajectory.tum, map.json, occupancy.pgm/.yaml, smooth.png} (replacing
+    the last run's files once all are written: ``staged_outputs``); return the lines to print."""
     smoothed = smooth_laser_run(run, config)
     result, solution = smoothed.graph, smoothed.graph.solution
     kinds = result.graph.kind
@@ -60,7 +57,7 @@ def laser_smooth_lines(log_file, config: SlamConfig, out_dir: Path) -> list[str]
     document = {
         "kind": "pose graph",
         "frame": "world; metres",
-        "source": str(log_file),
+        "source": str(run.path),
         "graph": _graph_facts(smoothed),
         "chi2": solution.chi2,
         "dof": solution.dof,

@@ -30,7 +30,7 @@ from mazeslam.core.beams import BeamGeometry, SensorOverrides
 from mazeslam.core.geometry import advance_pose, compose, relative, wrap_angle
 from mazeslam.core.outputs import write_file
 from mazeslam.data import log
-from mazeslam.data.loaded_run import LoadedRun
+from mazeslam.data.loaded_run import LoadedRun, load_run
 
 if TYPE_CHECKING:
     from mazeslam.pipeline import SlamConfig
@@ -248,6 +248,12 @@ CONCLUSIVE_MARGIN = 1.2
 def convention_given(sensor: SensorOverrides) -> bool:
     """The settings (config or command line) give the beam convention: first-beam angle or direction."""
     return sensor.first_beam_angle is not None or sensor.direction is not None
+
+
+def loaded_with_convention(path: str | Path, config: SlamConfig, cache_folder: Path | None = None) -> LoadedRun:
+    """The log at ``path`` loaded with ``config``'s ``[sensor]`` (``load_run``) and its beam convention
+    detected where nothing says it (``with_detected_convention``): how the commands load a log."""
+    return with_detected_convention(load_run(path, config.sensor), config, cache_folder)
 
 
 def with_detected_convention(run: LoadedRun, config: SlamConfig, cache_folder: Path | None = None) -> LoadedRun:

@@ -10,8 +10,8 @@ from pathlib import Path
 
 import numpy as np
 
-from mazeslam.data.beam_detection import with_detected_convention
-from mazeslam.data.loaded_run import LoadedRun, load_run
+from mazeslam.data.beam_detection import loaded_with_convention
+from mazeslam.data.loaded_run import LoadedRun
 from mazeslam.fastslam.filter import settings_hint
 from mazeslam.pipeline.config import MapKind, SlamConfig, load_slam_config
 from mazeslam.pipeline.fastslam_run import fastslam_on_run
@@ -123,7 +123,7 @@ def slam_on_file(path: str | Path, config: SlamConfig | str | Path | None = None
             print(choice.line, file=sys.stderr)
         config = choice.config
     config = as_config(config)
-    return run_slam(with_detected_convention(load_run(path, config.sensor), config), config, progress)
+    return run_slam(loaded_with_convention(path, config), config, progress)
 
 
 def as_config(config: SlamConfig | str | Path | None) -> SlamConfig:
