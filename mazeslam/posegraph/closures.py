@@ -6,15 +6,18 @@ Which pairs are tried (``candidate_pairs``), from the current estimate of the po
 the keyframes (a scan after ``keyframe_distance`` of travel or ``keyframe_turn`` of turning since
 the last keyframe). A query is matched
 
-* locally, against keyframes a few metres before it (``local_anchors``: the same stretch of path,
-  but not the neighbour the sequential edge already ties it to): what bounds the drift along a
-  corridor and can decide a step the scan-to-scan match got wrong;
+* locally, against keyframes a few metres before it and a few metres after it (``local_anchors``,
+  both ways: the same stretch of path, but not the neighbour the sequential edge already ties it
+  to): what bounds the drift along a corridor and can decide a step the scan-to-scan match got
+  wrong. The map ahead is what a smoother has and a filter has not: a scan at a corner is matched
+  to the corridor it turns into as well as to the one it leaves;
 * for closures, against the keyframes at least ``min_loop_path`` metres back along the path but
   within ``search_radius`` plus the window's reach of it by the estimate, the nearest of each
   separate visit of the place, at most ``closures_per_scan``.
 
 The submap of an anchor keyframe is the returns of the keyframes within ``submap_path`` metres of
-it along the path (and before the query's neighbour), placed by the estimate in the anchor's robot
+it along the path (and beyond the query's neighbouring keyframe on the anchor's side: before it for
+an anchor behind the query, after it for one ahead), placed by the estimate in the anchor's robot
 frame and thinned to one point per ``voxel``. The search window around the estimate's relative pose
 has the standard deviation the sequential chain between the two scans states (its summed
 covariances, the heading's spread swinging the path, ``chain_window``), at least ``min_window`` and
@@ -210,15 +213,15 @@ def candidate_pairs(
     poses: np.ndarray, keys: np.ndarray, cumulative: np.ndarray, params: ClosureParams
 ) -> list[tuple[int, int, EdgeKind]]:
     """The (anchor, query, kind) scan pairs to match by the estimate ``poses`` (S, 3), keyframes
-    ``keys`` (K,) (module docstring), in a fixed order: by query, local first, then the nearest
-    visits."""
+    ``keys`` (K,) (module docstring), in a fixed order: by query, local first (behind, then ahead),
+    then the nearest visits."""
     path = path_lengths(poses)
     pairs: list[tuple[int, int, EdgeKind]] = []
     key_path = path[keys]
     for n, query in enumerate(keys):
-        for back in params.local_anchors:
-            if n >= back:
-                pairs.append((int(keys[n - back]), int(query), EdgeKind.LOCAL))
+        for step in (*(-back for back in params.local_anchors), *params.local_anchors):
+            if 0 <= n + step < len(keys):
+                pairs.append((int(keys[n + step]), int(query), EdgeKind.LOCAL))
         far = keys[key_path <= path[query] - params.min_loop_path]
         if not len(far):
             continue
@@ -237,10 +240,17 @@ def candidate_pairs(
 
 
 def submap_members(anchor: int, query: int, keys: np.ndarray, path: np.ndarray, params: ClosureParams) -> np.ndarray:
-    """The keyframes within ``submap_path`` of ``anchor`` along the path and before the keyframe
-    preceding ``query`` (so that the query's own neighbourhood is not in its submap)."""
-    before = keys[keys < query]
-    limit = before[-1] if len(before) else query  # the query's preceding keyframe and after: left out
+    """The keyframes within ``submap_path`` of ``anchor`` along the path and beyond the keyframe
+    next to ``query`` on the anchor's side: before the one preceding it for an anchor behind,
+    after the one following it for an anchor ahead (so that the query's own neighbourhood is not
+    in its submap)."""
     close = np.abs(path[keys] - path[anchor]) <= params.submap_path
-    members = keys[close & (keys < limit)]
+    if anchor < query:
+        before = keys[keys < query]
+        limit = before[-1] if len(before) else query  # the query's preceding keyframe and after: left out
+        members = keys[close & (keys < limit)]
+    else:
+        after = keys[keys > query]
+        limit = after[0] if len(after) else query  # the query's following keyframe and before: left out
+        members = keys[close & (keys > limit)]
     return members if anchor in members else np.concatenate([members, [anchor]])

@@ -9,7 +9,7 @@ wrapped; its squared Mahalanobis length ``r^T Omega r`` is the edge's chi2 (3 de
 Edges are of four kinds (``EdgeKind``): sequential (laser odometry with the wheels as prior between
 consecutive scans, or a motion prior alone: always trusted), blind (laser odometry between
 consecutive scans where the log has no wheel odometry: the scans alone, which a corridor or a turn
-can fool), local (a scan matched to the scans just before it, the same part of the path) and closure
+can fool), local (a scan matched to the scans just before or after it, the same part of the path) and closure
 (a scan matched to scans far back along the path but near in space). Blind, local and closure edges
 come from a search that can be fooled, so the solver (``mazeslam.posegraph.solve``) treats them with
 a robust kernel.

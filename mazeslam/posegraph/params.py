@@ -41,9 +41,10 @@ class ClosureParams:
     Attributes:
         keyframe_distance, keyframe_turn: a keyframe after this much travel (m) or turning (rad):
             the grid filter's ``linear_update`` and ``angular_update`` (0.5, 0.25).
-        local_anchors: match each keyframe against the keyframes this many before it: (2, 4, 8,
-            16), about 1, 2, 4 and 8 m back at the keyframe spacing, the stretch of the map behind
-            it that a scan-to-map matcher (the grid filter's) would match it to; the nearest skips
+        local_anchors: match each keyframe against the keyframes this many before it and this
+            many after it: (2, 4, 8, 16), about 1, 2, 4 and 8 m at the keyframe spacing, the
+            stretch of the map behind it that a scan-to-map matcher (the grid filter's) would
+            match it to, and the same stretch ahead, which only a smoother has; the nearest skips
             the neighbour the sequential edge already ties it to. Empty: no local edges.
         min_loop_path: a closure's anchor is at least this far back along the path, m.
         search_radius: and within this distance of the query by the estimate, m, plus 3 window

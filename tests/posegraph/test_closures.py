@@ -12,6 +12,7 @@ from mazeslam.posegraph.closures import (
     candidate_pairs,
     keyframes,
     match_to_submap,
+    submap_members,
     voxel_thinned,
 )
 from mazeslam.posegraph.graph import EdgeKind
@@ -85,8 +86,9 @@ def test_keyframes_and_candidate_pairs_follow_the_path():
     pairs = candidate_pairs(poses, keys, cumulative, ClosureParams())
     local = [(a, q) for a, q, kind in pairs if kind == EdgeKind.LOCAL]
     closures = [(a, q) for a, q, kind in pairs if kind == EdgeKind.CLOSURE]
-    backs = {int(np.searchsorted(keys, q) - np.searchsorted(keys, a)) for a, q in local}
-    assert backs == set(ClosureParams().local_anchors)
+    steps = {int(np.searchsorted(keys, a) - np.searchsorted(keys, q)) for a, q in local}
+    anchors = set(ClosureParams().local_anchors)
+    assert steps == {-back for back in anchors} | anchors  # the keyframes behind and ahead
     assert closures and all(a < 200 <= q for a, q in closures)  # only the way back closes on the way out
     assert all(abs(poses[a, 0] - poses[q, 0]) < 4.0 for a, q in closures)
 
@@ -94,3 +96,16 @@ def test_keyframes_and_candidate_pairs_follow_the_path():
 def test_voxel_thinning_keeps_one_point_per_cell():
     points = np.array([[0.01, 0.01], [0.02, 0.03], [0.06, 0.01], [0.01, 0.07]])
     np.testing.assert_array_equal(voxel_thinned(points, 0.05), points[[0, 2, 3]])
+
+
+def test_a_submap_holds_the_anchors_side_of_the_path_and_not_the_querys_neighbours():
+    # Keyframes every 0.5 m along a straight path; submaps reach 3 m of path from their anchor.
+    keys = np.arange(0, 40, 2)
+    path = 0.25 * np.arange(40)
+    params = ClosureParams()
+    behind = submap_members(10, 20, keys, path, params)  # the query's preceding keyframe is 18
+    np.testing.assert_array_equal(behind, np.arange(0, 17, 2))  # 0 .. 5.5 m of path, before 18
+    ahead = submap_members(30, 20, keys, path, params)  # its following keyframe is 22
+    np.testing.assert_array_equal(ahead, np.arange(24, 39, 2))  # 4.5 .. 10.5 m of path, after 22
+    near = submap_members(24, 20, keys, path, params)  # the anchor itself is always a member
+    assert 22 not in near and 24 in near and near.min() > 22
