@@ -185,8 +185,12 @@ def match_to_submap(
     return SubmapMatch(best.pose, covariance, best.overlap, best.objective, second, refusal)
 
 
-def chain_window(cumulative: np.ndarray, path: np.ndarray, first: int, last: int, params: ClosureParams) -> np.ndarray:
-    """The search window's covariance (3, 3) between scans ``first`` < ``last`` (``chain_sigmas``)."""
+def chain_window(
+    cumulative: np.ndarray, path: np.ndarray, anchor: int, query: int, params: ClosureParams
+) -> np.ndarray:
+    """The search window's covariance (3, 3) between scans ``anchor`` and ``query``, in either order
+    (``chain_sigmas`` from the earlier to the later)."""
+    first, last = min(anchor, query), max(anchor, query)
     sigma_xy, sigma_th = chain_sigmas(cumulative, path, np.array([first]), last, params)
     return np.diag([sigma_xy[0] ** 2, sigma_xy[0] ** 2, sigma_th[0] ** 2])
 

@@ -10,6 +10,7 @@ from mazeslam.core.geometry import relative
 from mazeslam.posegraph.closures import (
     build_submap,
     candidate_pairs,
+    chain_window,
     keyframes,
     match_to_submap,
     submap_members,
@@ -109,3 +110,14 @@ def test_a_submap_holds_the_anchors_side_of_the_path_and_not_the_querys_neighbou
     np.testing.assert_array_equal(ahead, np.arange(24, 39, 2))  # 4.5 .. 10.5 m of path, after 22
     near = submap_members(24, 20, keys, path, params)  # the anchor itself is always a member
     assert 22 not in near and 24 in near and near.min() > 22
+
+
+def test_the_search_window_is_the_chains_whichever_side_the_anchor_is_on():
+    # 10 intervals of 1 m, each 0.02^2 m^2 and 0.01^2 rad^2: between scans 2 and 6, 4 intervals.
+    cumulative = np.column_stack([np.arange(11) * 0.02**2, np.arange(11) * 0.01**2])
+    path = np.arange(11.0)
+    params = ClosureParams(min_window=(0.001, 0.001))
+    behind, ahead = chain_window(cumulative, path, 2, 6, params), chain_window(cumulative, path, 6, 2, params)
+    np.testing.assert_array_equal(behind, ahead)
+    position = 4 * 0.02**2 + 4.0**2 * 4 * 0.01**2 / 3  # the summed variance plus the heading's swing
+    np.testing.assert_allclose(np.diag(behind), [position, position, 4 * 0.01**2])
