@@ -16,6 +16,9 @@ numpy, and OpenCV's distance transform per particle and scan) timed in the same 
 4. aces, the whole log, 30 and 300 particles: the log's duration over the filter's CPU time
    (targets at least 150x and 20x), and the peak memory of a process running it, against the same
    run of the reference filter (target: no higher).
+5. ``mazeslam slam log1 --live`` with the grid filter (``GridLiveView``): how far a scan's update
+   falls behind the log's own clock when the live view plays the log at its pace (``PacedReplay``).
+   Target: no later than one frame of the view (1 / ``max_fps``).
 
 The CARMEN logs and log1 come from ../shared/data; their rows are skipped, saying so, where it is absent.
 Run: ``python benchmarks/bench_grid.py``.
@@ -166,6 +169,57 @@ def command_rows(folder: Path, log1: LoadedRun) -> Iterator[dict]:
     }
 
 
+class PacedReplay:
+    """``on_update`` for ``run_slam``: the grid filter's live view (``GridLiveView``, off-screen
+    here) driven as its window drives it at the log's own pace (``FilterView``: after each update,
+    wait until the scan is due, then draw a frame when one frame interval and the last frame's
+    cost have passed), on a clock that adds the CPU seconds of each update and each frame drawn
+    instead of waiting. ``lags``: per scan, how far its update ended after the scan was due by the
+    log's clock (negative: early, the window then waits), s."""
+
+    def __init__(self, run: LoadedRun):
+        from mazeslam.viz.live import GridLiveView
+
+        with mock.patch.dict(os.environ, {"MPLBACKEND": "Agg"}):  # off-screen even where a display is
+            self.view = GridLiveView(run, "live view (bench)")
+        self.times = run.log.times
+        self.clock, self.first, self.mark = 0.0, None, 0.0
+        self.frame_end, self.frame_cost = -float("inf"), 0.0
+        self.lags: list[float] = []
+
+    def __call__(self, index: int, slam) -> None:
+        now = time.process_time()
+        if self.first is None:
+            self.first, self.mark = self.times[index], now
+        self.clock += now - self.mark  # the update, and the records carried on before it
+        self.view.path.append(self.view.mean_pose(slam))
+        due = self.times[index] - self.first
+        self.lags.append(self.clock - due)
+        self.clock = max(self.clock, due)
+        if self.clock - self.frame_end >= max(1.0 / self.view.max_fps, self.frame_cost):
+            began = time.process_time()
+            self.view.draw(index, slam)
+            self.frame_cost = time.process_time() - began
+            self.clock += self.frame_cost
+            self.frame_end = self.clock
+        self.mark = time.process_time()
+
+
+def live_row(log1: LoadedRun, course: SlamConfig) -> dict:
+    run_slam(log1, course, progress=False)  # numba's kernels loaded, as a second run finds them
+    replay = PacedReplay(log1)
+    run_slam(log1, course, progress=False, on_update=replay)
+    lag, frame = max(replay.lags[1:]), 1.0 / replay.view.max_fps  # the first scan sets the clock
+    return {
+        "benchmark": f"`mazeslam slam log1 --live` (grid filter, the log's pace, {replay.view.frames} frames): "
+        "the latest a scan's update ends after its time in the log (negative: early)",
+        "value": lag,
+        "unit": "s",
+        "target": frame,
+        "met": lag <= frame,
+    }
+
+
 def thousand_particles_row(log1: LoadedRun) -> dict:
     seconds = filter_cpu(log1, 1000)
     return {
@@ -244,6 +298,7 @@ def run() -> Iterator[dict]:
             yield from ratio_rows("log1 (30 particles)", log1, course)
             yield from command_rows(folder, log1)
             yield thousand_particles_row(log1)
+            yield live_row(log1, course)
         else:
             print(f"grid benchmarks on log1 skipped: no course log at {COURSE_LOG}")
         if ACES.exists():
