@@ -172,8 +172,8 @@ def ambiguous_intervals(
     required). Along a corridor a blind scan-to-scan match can sit metres off with as good an
     objective (orebro: the test finds the intervals 17, 28, 36, 213, 216, 221 and 227 that
     experiments/carmen_grid/results/orebro_checks.md finds metres or a right angle wrong, among 25
-    of 236; aligned ATE 0.62 to 0.58 m); such an edge is left out, its constant-velocity prior
-    and the local matches place the scan."""
+    of 236); such an edge is left out, its constant-velocity prior and the local matches place the
+    scan."""
     closure = dataclasses.replace(params.closures, min_overlap=0.0)
     found = np.zeros(len(increments), bool)
     for k in np.flatnonzero(blind):

@@ -165,9 +165,8 @@ class PoseGraphParams:
             the kernel at its final width from the start. On orebro (the one CARMEN log without
             odometry) the blind chain is metres or a right angle wrong at about a dozen corridor
             steps, and matches searched around it agree with it or are refused: aligned ATE 7.1 m
-            from the chain, 0.62 m from the grid path (0.58 m with the blind intervals' ambiguity
-            test, ``laser_graph.ambiguous_intervals``; the grid path alone: 0.55 m), 0.77 m from the
-            grid path with graduated non-convexity (experiments/carmen_posegraph/results).
+            from the chain, 0.57 m from the grid path (the grid path alone: 0.55 m), worse from the
+            grid path with graduated non-convexity (experiments/carmen_posegraph/README.md).
     """
 
     sequential: SequentialParams = field(default_factory=SequentialParams)
