@@ -1,0 +1,85 @@
+"""The CARMEN logs' scans placed by three paths, without the reference as judge: the reference poses
+(a gmapping run's), the pose graph's (results/<log>_trajectory.csv, from run.py) and the grid
+filter's best path (experiments/carmen_grid/results/<log>_seed<k>/trajectory.csv, 5 seeds). The
+measure is ``mazeslam.evaluation.sharpness``'s: the distinct occupied cells of the returns placed by
+a path, fewer = sharper walls, with the path's extent beside it (a shrunken path also looks
+sharper). Cells of 0.05 m (the grid's) and returns of 0.1-8 m (walls near enough that a degree of
+heading error moves them by a cell; far returns are sparse).
+
+Each figure is a ratio to the reference's: where the graph's or the filter's map is sharper than the
+reference's, the reference's own errors are part of what the aligned ATE against it measures.
+
+Run: ``python -m experiments.carmen_posegraph.sharpness`` (after run.py and experiments/carmen_grid's
+run.py); writes results/sharpness.csv and results/sharpness.md. About 1 CPU minute.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from experiments.carmen_grid.run import LOGS, imported_run
+from mazeslam.evaluation.sharpness import occupied_cells, path_extent
+
+HERE = Path(__file__).resolve().parent
+RESULTS = HERE / "results"
+GRID_RESULTS = HERE.parent / "carmen_grid" / "results"
+SEEDS = range(5)
+CELL, MIN_RANGE, MAX_RANGE = 0.05, 0.1, 8.0
+
+
+def graph_path(name: str, reference: np.ndarray) -> np.ndarray:
+    """The pose graph's poses (R, 3) at the log's scan records (other records keep the reference's:
+    only scans are placed)."""
+    scans = pd.read_csv(RESULTS / f"{name}_trajectory.csv")
+    poses = reference.copy()
+    poses[scans.record.to_numpy()] = scans[["x", "y", "theta"]].to_numpy()
+    return poses
+
+
+def grid_path(name: str, seed: int) -> np.ndarray:
+    """The grid filter's best path (R, 3), every record."""
+    return pd.read_csv(GRID_RESULTS / f"{name}_seed{seed}" / "trajectory.csv")[["x", "y", "theta"]].to_numpy()
+
+
+def log_row(name: str) -> dict:
+    run = imported_run(name)
+    reference = run.truth
+    paths = {"graph": graph_path(name, reference), **{f"grid{seed}": grid_path(name, seed) for seed in SEEDS}}
+
+    def cells(poses: np.ndarray) -> int:
+        return occupied_cells(run.log, poses, run.geometry, MIN_RANGE, MAX_RANGE, CELL)
+
+    reference_cells, reference_extent = cells(reference), path_extent(reference)
+    ratios = {key: cells(poses) / reference_cells for key, poses in paths.items()}
+    extents = {key: path_extent(poses) / reference_extent for key, poses in paths.items()}
+    grid = [ratios[f"grid{seed}"] for seed in SEEDS]
+    return {
+        "log": name,
+        "reference_cells": reference_cells,
+        "graph_ratio": ratios["graph"],
+        "grid_ratio_best": min(grid),
+        "grid_ratio_median": float(np.median(grid)),
+        "grid_ratio_worst": max(grid),
+        "graph_extent_ratio": extents["graph"],
+        "grid_extent_ratio_median": float(np.median([extents[f"grid{seed}"] for seed in SEEDS])),
+    }
+
+
+def main() -> None:
+    table = pd.DataFrame([log_row(name) for name in LOGS])
+    table.to_csv(RESULTS / "sharpness.csv", index=False, float_format="%.4f")
+    header = (
+        "Occupied 0.05 m cells of each CARMEN log's returns (0.1-8 m) placed by the pose graph and by the grid "
+        "filter's best path (5 seeds: best, median, worst), as a ratio to the same count along the reference "
+        "poses (below 1: sharper walls than the reference's); the paths' extents (bounding-box diagonal) as a "
+        "ratio to the reference's (experiments/carmen_posegraph/sharpness.py).\n\n"
+    )
+    (RESULTS / "sharpness.md").write_text(header + table.to_markdown(index=False, floatfmt=".4g") + "\n")
+    print(table.to_string())
+
+
+if __name__ == "__main__":
+    main()
