@@ -5,8 +5,7 @@ improved estimate a few times.
 1. Sequential edges: the laser odometry with each interval's match covariance
    (``mazeslam.posegraph.sequential``). Their chain from the log's start pose is the first estimate;
    on a log without any wheel odometry (``PoseGraphParams.grid_start``) the grid filter's best path
-   (``mazeslam.gridslam``, the config's ``[grid]``) is, and the robust solve starts at the kernel's
-   final width (``SolveParams.graduated`` False). A blind match (no wheel odometry) that the
+   (``mazeslam.gridslam``, the config's ``[grid]``) is. A blind match (no wheel odometry) that the
    ambiguity test finds ambiguous is left out (``ambiguous_intervals``).
 2. Each pass: the keyframes' local and closure pairs by the current estimate
    (``mazeslam.posegraph.closures.candidate_pairs``) not tried before are matched; the accepted ones
@@ -145,11 +144,8 @@ def laser_pose_graph(run: LoadedRun, config: SlamConfig, params: PoseGraphParams
         sequential = sequential.select(np.concatenate([~ambiguous[1:], priors_kept]))
     initial = chain
     if params.grid_start and len(chain) > 1 and blind[1:].all():
-        # No wheel odometry at all: the grid filter's best path is the first estimate, close to
-        # the optimum, so the kernel is at its final width from the start (graduated
-        # non-convexity would first average in the blind edges that are metres off).
+        # No wheel odometry at all: the grid filter's best path is the first estimate.
         initial = grid_filter_path(run, config, odometry.scan_records)
-        params = dataclasses.replace(params, solve=dataclasses.replace(params.solve, graduated=False))
     result = solve_laser_graph(
         odometry.scan_records, chain, sequential, covariances, points, scan_params, params, began, initial
     )

@@ -161,12 +161,11 @@ class PoseGraphParams:
         solve: the robust solve (``SolveParams``).
         passes: at most this many rounds of detection and solve.
         grid_start: on a log without wheel odometry, start from the grid filter's best path (the
-            slam config's ``[grid]``) instead of the blind laser odometry's chain, and solve with
-            the kernel at its final width from the start. On orebro (the one CARMEN log without
-            odometry) the blind chain is metres or a right angle wrong at about a dozen corridor
-            steps, and matches searched around it agree with it or are refused: aligned ATE 7.1 m
-            from the chain, 0.57 m from the grid path (the grid path alone: 0.55 m), worse from the
-            grid path with graduated non-convexity (experiments/carmen_posegraph/README.md).
+            slam config's ``[grid]``) instead of the blind laser odometry's chain. On orebro (the
+            one CARMEN log without odometry) the blind chain is metres or a right angle wrong at
+            about a dozen corridor steps, and matches searched around it agree with it or are
+            refused: aligned ATE 7.1 m from the chain, 0.35 m from the grid path (the grid path
+            alone: 0.55 m; experiments/carmen_posegraph/README.md).
     """
 
     sequential: SequentialParams = field(default_factory=SequentialParams)
