@@ -191,8 +191,8 @@ class PacedReplay:
         now = time.process_time()
         if self.first is None:
             self.first, self.mark = self.times[index], now
-        self.clock += now - self.mark  # the update, and the records carried on before it
         self.view.path.append(self.view.mean_pose(slam))
+        self.clock += time.process_time() - self.mark  # the update, the records before it, the view's path
         due = self.times[index] - self.first
         self.lags.append(self.clock - due)
         self.clock = max(self.clock, due)
@@ -209,6 +209,7 @@ def live_row(log1: LoadedRun, course: SlamConfig) -> dict:
     run_slam(log1, course, progress=False)  # numba's kernels loaded, as a second run finds them
     replay = PacedReplay(log1)
     run_slam(log1, course, progress=False, on_update=replay)
+    replay.view.close(keep_open=False)
     lag, frame = max(replay.lags[1:]), 1.0 / replay.view.max_fps  # the first scan sets the clock
     return {
         "benchmark": f"`mazeslam slam log1 --live` (grid filter, the log's pace, {replay.view.frames} frames): "

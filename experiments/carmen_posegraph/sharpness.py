@@ -3,14 +3,14 @@
 filter's best path (experiments/carmen_grid/results/<log>_seed<k>/trajectory.csv, 5 seeds). The
 measure is ``mazeslam.evaluation.sharpness``'s: the distinct occupied cells of the returns placed by
 a path, fewer = sharper walls, with the path's extent beside it (a shrunken path also looks
-sharper). Cells of 0.05 m (the grid's) and returns of 0.1-8 m (walls near enough that a degree of
-heading error moves them by a cell; far returns are sparse).
+sharper). Cells of 0.05 m (the grid's) and returns of 0.1-8 m (a degree of heading error moves a
+wall 3 m away by a cell, one 8 m away by three; farther returns are sparse).
 
 Each figure is a ratio to the reference's: where the graph's or the filter's map is sharper than the
 reference's, the reference's own errors are part of what the aligned ATE against it measures.
 
 Run: ``python -m experiments.carmen_posegraph.sharpness`` (after run.py and experiments/carmen_grid's
-run.py); writes results/sharpness.csv and results/sharpness.md. About 1 CPU minute.
+run.py); writes results/sharpness.csv and results/sharpness.md. About 15 CPU s.
 """
 
 from __future__ import annotations

@@ -130,8 +130,6 @@ class SolveParams:
         gnc_iterations: Levenberg-Marquardt iterations at each ``mu`` above 1.
         max_iterations: iterations at ``mu`` = 1 and in the final Gaussian solve, each.
         step_tolerance: the solve stops once a step moves no pose by more than this (m or rad).
-        graduated: start the robust edges convex and narrow the kernel (graduated non-convexity);
-            False: the kernel at its final width from the start, for a first estimate already close.
     """
 
     kernel_chi2: float = 11.34
@@ -139,7 +137,6 @@ class SolveParams:
     gnc_iterations: int = 3
     max_iterations: int = 50
     step_tolerance: float = 1e-6
-    graduated: bool = True
 
     def __post_init__(self):
         require(self.kernel_chi2 > 0, f"kernel_chi2 must be positive, got {self.kernel_chi2}")

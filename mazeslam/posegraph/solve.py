@@ -128,10 +128,9 @@ def solve_graph(
     # 1. Graduated non-convexity on the robust edges: start where every edge is quadratic.
     robust = graph.robust
     solves = 0
-    if params.graduated or not robust.any():
-        poses, solves, _ = _levenberg_marquardt(graph, poses, np.inf, params.max_iterations, params.step_tolerance, 0)
+    poses, solves, _ = _levenberg_marquardt(graph, poses, np.inf, params.max_iterations, params.step_tolerance, 0)
     if robust.any():
-        mu = max(1.0, float(edge_chi2(graph, poses)[robust].max()) / phi) if params.graduated else 1.0
+        mu = max(1.0, float(edge_chi2(graph, poses)[robust].max()) / phi)
         while True:
             last = mu <= 1.0
             count = params.max_iterations if last else params.gnc_iterations
