@@ -62,11 +62,13 @@ class PoseGraphResult:
             start pose), m and rad; covariances (S, 3, 3) in the world frame: the graph's relative
             to the first scan and the first scan's own from the start pose
             (``with_first_pose_uncertainty``).
-        odometry_poses: (S, 3) the laser odometry chained: the first estimate (on a log without
-            wheel odometry the grid filter's path is, ``PoseGraphParams.grid_start``).
+        odometry_poses: (S, 3) the laser odometry chained from the log's start pose: the first
+            estimate, except on a log without wheel odometry, whose first estimate is the grid
+            filter's path (``PoseGraphParams.grid_start``).
         graph: every edge; solution: the final solve (``kept`` says which robust edges it kept).
         tried, accepted: per ``EdgeKind`` name ("local", "closure"), matches tried and accepted by
-            the ambiguity test; refused: per reason ("overlap", "ambiguous", "degenerate").
+            the ambiguity test; refused: per reason ("overlap", "ambiguous", "degenerate", and
+            "empty": a submap or query with too few points to match).
         passes: detection and solve rounds run; pass_seconds: per pass (matching seconds, solve
             seconds, edges found), the last the final solve with covariances; seconds: wall-clock
             seconds of the whole build.
