@@ -174,7 +174,7 @@ def lookup(field, world, distance, gradient):
     inside the window's edge, or beyond it) is interpolated between the two outermost rows or
     columns of centres with its own fraction of a cell: neither clamped nor extrapolated, but a
     sawtooth of one cell's period (as the reference filter's lookup; ``window_margin`` keeps the
-    end points away from the edge).
+    end points away from the edge). A ``gradient`` of no rows is left out.
 
     One function for the whole batch of points: numba passes arrays to a compiled call with a
     reference count, which costs more than a memoised read, so the per-point work stays in this loop.
@@ -182,6 +182,7 @@ def lookup(field, world, distance, gradient):
     values, threshold, blocks, memo, stamps, stamp, origin, resolution = field
     size_y = values.shape[1]
     scale = np.float32(resolution)
+    with_gradient = gradient.shape[0] > 0
     for k in range(world.shape[0]):
         cell_x = (world[k, 0] - origin[0]) / resolution - 0.5  # cell centres at integers
         cell_y = (world[k, 1] - origin[1]) / resolution - 0.5
@@ -197,8 +198,9 @@ def lookup(field, world, distance, gradient):
         d00, d10 = memo[i * size_y + j] * scale, memo[(i + 1) * size_y + j] * scale
         d01, d11 = memo[i * size_y + j + 1] * scale, memo[(i + 1) * size_y + j + 1] * scale
         distance[k] = (d00 * (1 - fx) + d10 * fx) * (1 - fy) + (d01 * (1 - fx) + d11 * fx) * fy
-        gradient[k, 0] = ((d10 - d00) * (1 - fy) + (d11 - d01) * fy) / resolution
-        gradient[k, 1] = ((d01 - d00) * (1 - fx) + (d11 - d10) * fx) / resolution
+        if with_gradient:
+            gradient[k, 0] = ((d10 - d00) * (1 - fy) + (d11 - d01) * fy) / resolution
+            gradient[k, 1] = ((d01 - d00) * (1 - fx) + (d11 - d10) * fx) / resolution
 
 
 @njit(cache=True)
@@ -217,14 +219,33 @@ def _wrap(angle):
 
 
 @njit(cache=True)
-def _squared_norm(offset, information):
-    """``offset^T information offset`` for a pose offset (3,), its heading wrapped first (in place)."""
-    offset[2] = _wrap(offset[2])
-    total = 0.0
-    for a in range(3):
-        for b in range(3):
-            total += offset[a] * information[a, b] * offset[b]
-    return total
+def _prior_terms(x, y, theta, prior, information):
+    """The prior's part of one Gauss-Newton step at pose (x, y, theta): its gradient ``information
+    offset`` (3 scalars) and half its squared norm ``0.5 offset^T information offset``, for the
+    offset from ``prior`` (3,) (heading wrapped) and ``information`` (3, 3)."""
+    offset = (x - prior[0], y - prior[1], _wrap(theta - prior[2]))
+    g0 = information[0, 0] * offset[0] + information[0, 1] * offset[1] + information[0, 2] * offset[2]
+    g1 = information[1, 0] * offset[0] + information[1, 1] * offset[1] + information[1, 2] * offset[2]
+    g2 = information[2, 0] * offset[0] + information[2, 1] * offset[1] + information[2, 2] * offset[2]
+    return g0, g1, g2, 0.5 * (offset[0] * g0 + offset[1] * g1 + offset[2] * g2)
+
+
+@njit(cache=True)
+def _solve_symmetric(h00, h01, h02, h11, h12, h22, b0, b1, b2):
+    """``H^-1 b`` for a symmetric positive definite ``H`` (3, 3) given by its upper triangle, by
+    Cholesky (``H = L L^T``): three scalars."""
+    l00 = math.sqrt(h00)
+    l10, l20 = h01 / l00, h02 / l00
+    l11 = math.sqrt(h11 - l10 * l10)
+    l21 = (h12 - l20 * l10) / l11
+    l22 = math.sqrt(h22 - l20 * l20 - l21 * l21)
+    z0 = b0 / l00
+    z1 = (b1 - l10 * z0) / l11
+    z2 = (b2 - l20 * z0 - l21 * z1) / l22
+    x2 = z2 / l22
+    x1 = (z1 - l21 * x2) / l11
+    x0 = (z0 - l10 * x1 - l20 * x2) / l00
+    return x0, x1, x2
 
 
 @njit(cache=True)
@@ -232,33 +253,58 @@ def refine(field, points, prior, information, settings, start):
     """The pose (3,) maximising the end points' likelihood times the Gaussian prior, by
     iteratively reweighted Gauss-Newton from ``start`` (3,): ``points`` (N, 2) robot frame,
     ``prior`` (3,) and its ``information`` (3, 3); ``settings`` = (the stages' sigmas (S,) m,
-    iterations per stage, the likelihood's scale and floor) (``MatchParams``)."""
+    iterations per stage, the likelihood's scale and floor) (``MatchParams``).
+
+    Each step solves ``(information + sum_k w_k J_k^T J_k) delta = information offset + sum_k
+    w_k J_k^T d_k`` for the points' distances ``d_k``, their Jacobians ``J_k = (dd/dx, dd/dy,
+    dd/dtheta)`` and the weights ``w_k = scale l_k / (l_k + floor) / sigma^2`` of their
+    likelihoods ``l_k = exp(-d_k^2 / (2 sigma^2))``, then moves the pose by ``-delta``."""
     schedule, iterations, scale, floor = settings
     count = points.shape[0]
     arms, world = np.empty((count, 2)), np.empty((count, 2))
     distance, gradient = np.empty(count), np.empty((count, 2))
-    pose = start.copy()
+    x, y, theta = start[0], start[1], start[2]
     for sigma in schedule:
         for _ in range(iterations):
-            place(np.array([0.0, 0.0, pose[2]]), points, arms)
-            world[:, 0] = pose[0] + arms[:, 0]
-            world[:, 1] = pose[1] + arms[:, 1]
-            lookup(field, world, distance, gradient)
-            offset = pose - prior
-            offset[2] = _wrap(offset[2])
-            hessian = information.copy()
-            step = information @ offset
+            cos_t, sin_t = math.cos(theta), math.sin(theta)
             for k in range(count):
+                arms[k, 0] = cos_t * points[k, 0] - sin_t * points[k, 1]
+                arms[k, 1] = sin_t * points[k, 0] + cos_t * points[k, 1]
+                world[k, 0], world[k, 1] = x + arms[k, 0], y + arms[k, 1]
+            lookup(field, world, distance, gradient)
+            b0, b1, b2, _half = _prior_terms(x, y, theta, prior, information)
+            h00, h01, h02 = information[0, 0], information[0, 1], information[0, 2]
+            h11, h12, h22 = information[1, 1], information[1, 2], information[2, 2]
+            for k in range(count):
+                g0, g1 = gradient[k, 0], gradient[k, 1]
+                g2 = g1 * arms[k, 0] - g0 * arms[k, 1]
                 likelihood = math.exp(-0.5 * (distance[k] / sigma) ** 2)
                 weight = scale * likelihood / (likelihood + floor) / sigma**2
-                row = (gradient[k, 0], gradient[k, 1], gradient[k, 1] * arms[k, 0] - gradient[k, 0] * arms[k, 1])
-                for a in range(3):
-                    step[a] += weight * row[a] * distance[k]
-                    for b in range(3):
-                        hessian[a, b] += weight * row[a] * row[b]
-            pose -= np.linalg.solve(hessian, step)
-            pose[2] = _wrap(pose[2])
-    return pose
+                pull = weight * distance[k]
+                b0, b1, b2 = b0 + pull * g0, b1 + pull * g1, b2 + pull * g2
+                h00, h01, h02 = h00 + weight * g0 * g0, h01 + weight * g0 * g1, h02 + weight * g0 * g2
+                h11, h12, h22 = h11 + weight * g1 * g1, h12 + weight * g1 * g2, h22 + weight * g2 * g2
+            d0, d1, d2 = _solve_symmetric(h00, h01, h02, h11, h12, h22, b0, b1, b2)
+            x, y, theta = x - d0, y - d1, _wrap(theta - d2)
+    return np.array([x, y, theta])
+
+
+#: The running product of the points' likelihoods is rescaled below this, so that it cannot underflow.
+_SMALL, _LOG_SMALL = 1e-200, math.log(1e-200)
+
+
+@njit(cache=True)
+def _log_product(distance, sigma, floor):
+    """``sum_k log(exp(-d_k^2 / (2 sigma^2)) + floor)`` over ``distance`` (N,) m, as the log of the
+    product of its factors (each in [floor, 1 + floor]): one logarithm per stretch of factors
+    instead of one per point."""
+    product, total = 1.0, 0.0
+    for k in range(distance.shape[0]):
+        product *= math.exp(-0.5 * (distance[k] / sigma) ** 2) + floor
+        if product < _SMALL:
+            product /= _SMALL
+            total += _LOG_SMALL
+    return total + math.log(product)
 
 
 @njit(cache=True)
@@ -275,40 +321,23 @@ def objective(
     """``log p(z | m, x) - 0.5 (x - prior)^T information (x - prior)`` (K,) at ``poses`` (K, 3) for
     end points ``points`` (N, 2) robot frame (the heading offset wrapped)."""
     count = points.shape[0]
-    world, distance, gradient = np.empty((count, 2)), np.empty(count), np.empty((count, 2))
+    world, distance, no_gradient = np.empty((count, 2)), np.empty(count), np.empty((0, 2))
     scores = np.empty(poses.shape[0])
     for p in range(poses.shape[0]):
         place(poses[p], points, world)
-        lookup(field, world, distance, gradient)
-        scores[p] = scale * _log_product(distance, sigma, floor) - 0.5 * _squared_norm(poses[p] - prior, information)
+        lookup(field, world, distance, no_gradient)
+        half_norm = _prior_terms(poses[p, 0], poses[p, 1], poses[p, 2], prior, information)[3]
+        scores[p] = scale * _log_product(distance, sigma, floor) - half_norm
     return scores
-
-
-#: The running product of the points' likelihoods is rescaled below this, so that it cannot underflow.
-_SMALL, _LOG_SMALL = 1e-200, math.log(1e-200)
-
-
-@njit(cache=True)
-def _log_product(distance, sigma, floor):
-    """``sum_i log(exp(-d_i^2 / (2 sigma^2)) + floor)`` over ``distance`` (N,) m, as the log of the
-    product of its factors (each in [floor, 1 + floor]): one logarithm per stretch of factors
-    instead of one per point."""
-    product, total = 1.0, 0.0
-    for k in range(distance.shape[0]):
-        product *= math.exp(-0.5 * (distance[k] / sigma) ** 2) + floor
-        if product < _SMALL:
-            product /= _SMALL
-            total += _LOG_SMALL
-    return total + math.log(product)
 
 
 @njit(cache=True)
 def overlap(field, pose, points, within):
     """Share of ``points`` (N, 2) robot frame that lie within ``within`` m of an occupied cell at ``pose`` (3,)."""
     count = points.shape[0]
-    world, distance, gradient = np.empty((count, 2)), np.empty(count), np.empty((count, 2))
+    world, distance = np.empty((count, 2)), np.empty(count)
     place(pose, points, world)
-    lookup(field, world, distance, gradient)
+    lookup(field, world, distance, np.empty((0, 2)))
     return np.sum(distance <= within) / max(count, 1)
 
 
@@ -356,30 +385,20 @@ def proposal(
 
 
 @njit(cache=True)
-def _cell_of(x, y, origin_x, origin_y, resolution, size_x, size_y):
-    """The flat index of the window cell holding world point (x, y), or -1 outside the window
-    (scalars only, so that it compiles inline into the marking loop)."""
-    i = math.floor((x - origin_x) / resolution)
-    j = math.floor((y - origin_y) / resolution)
-    if i < 0 or j < 0 or i >= size_x or j >= size_y:
-        return -1
-    return int(i) * size_y + int(j)
-
-
-@njit(cache=True)
-def _mark(source, mark, marks, order, count, origin, resolution, shape, x0, y0, cos_t, sin_t):
-    """Mark in ``marks`` (X * Y,) with ``mark`` the window cells of the points ``source`` (K, 2)
+def _mark(source, mark, marks, rows, columns, count, origin, resolution, x0, y0, cos_t, sin_t):
+    """Mark in ``marks`` (X, Y) with ``mark`` the window cells of the points ``source`` (K, 2)
     (robot frame, the robot at (x0, y0) heading with cos_t, sin_t) whose mark is lower, appending
-    newly marked cells to ``order`` after its first ``count``; returns the new count."""
+    each newly marked cell's row and column to ``rows`` and ``columns`` after their first ``count``;
+    returns the new count. Samples outside the window are left out."""
+    size_x, size_y = marks.shape
     for k in range(source.shape[0]):
-        x = x0 + cos_t * source[k, 0] - sin_t * source[k, 1]
-        y = y0 + sin_t * source[k, 0] + cos_t * source[k, 1]
-        cell = _cell_of(x, y, origin[0], origin[1], resolution, shape[0], shape[1])
-        if cell >= 0 and marks[cell] < mark:
-            if marks[cell] == 0:
-                order[count] = cell
-                count += 1
-            marks[cell] = mark
+        i = math.floor((x0 + cos_t * source[k, 0] - sin_t * source[k, 1] - origin[0]) / resolution)
+        j = math.floor((y0 + sin_t * source[k, 0] + cos_t * source[k, 1] - origin[1]) / resolution)
+        if 0 <= i < size_x and 0 <= j < size_y:  # without branches on the marks, which samples flip at random
+            before = marks[i, j]
+            rows[count], columns[count] = i, j
+            count += before == 0
+            marks[i, j] = max(before, mark)
     return count
 
 
@@ -391,15 +410,17 @@ def integrate(values, origin, resolution, free, hits, x0, y0, cos_t, sin_t, miss
     clamped to [-clamp, clamp]. Samples outside the window are left out. Returns the tiles changed:
     bool (X / tile_size, Y / tile_size)."""
     size_x, size_y = values.shape
-    marks = np.zeros(size_x * size_y, dtype=np.uint8)  # 1: a beam crosses the cell, 2: a beam ends in it
-    order = np.empty(free.shape[0] + hits.shape[0], dtype=np.int64)
-    count = _mark(free, 1, marks, order, 0, origin, resolution, values.shape, x0, y0, cos_t, sin_t)
-    count = _mark(hits, 2, marks, order, count, origin, resolution, values.shape, x0, y0, cos_t, sin_t)
+    marks = np.zeros((size_x, size_y), dtype=np.uint8)  # 1: a beam crosses the cell, 2: a beam ends in it
+    rows = np.empty(free.shape[0] + hits.shape[0], dtype=np.int32)
+    columns = np.empty_like(rows)
+    count = _mark(free, 1, marks, rows, columns, 0, origin, resolution, x0, y0, cos_t, sin_t)
+    count = _mark(hits, 2, marks, rows, columns, count, origin, resolution, x0, y0, cos_t, sin_t)
     changed = np.zeros((size_x // tile_size, size_y // tile_size), dtype=np.bool_)
+    tile_row, tile_column = np.arange(size_x) // tile_size, np.arange(size_y) // tile_size
     low, high = np.float32(-clamp), np.float32(clamp)
     for k in range(count):
-        i, j = order[k] // size_y, order[k] % size_y
-        change = np.float32(hit) if marks[order[k]] == 2 else np.float32(miss)
+        i, j = rows[k], columns[k]
+        change = np.float32(hit) if marks[i, j] == 2 else np.float32(miss)
         values[i, j] = min(max(values[i, j] + change, low), high)
-        changed[i // tile_size, j // tile_size] = True
+        changed[tile_row[i], tile_column[j]] = True
     return changed
