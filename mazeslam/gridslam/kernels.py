@@ -385,8 +385,8 @@ def proposal(
 
 
 @njit(cache=True)
-def _mark(source, mark, marks, rows, columns, count, origin, resolution, x0, y0, cos_t, sin_t):
-    """Mark in ``marks`` (X, Y) with ``mark`` the window cells of the points ``source`` (K, 2)
+def mark(source, level, marks, rows, columns, count, origin, resolution, x0, y0, cos_t, sin_t):
+    """Mark in ``marks`` (X, Y) with ``level`` the window cells of the points ``source`` (K, 2)
     (robot frame, the robot at (x0, y0) heading with cos_t, sin_t) whose mark is lower, appending
     each newly marked cell's row and column to ``rows`` and ``columns`` after their first ``count``;
     returns the new count. Samples outside the window are left out."""
@@ -398,7 +398,7 @@ def _mark(source, mark, marks, rows, columns, count, origin, resolution, x0, y0,
             before = marks[i, j]
             rows[count], columns[count] = i, j
             count += before == 0
-            marks[i, j] = max(before, mark)
+            marks[i, j] = max(before, level)
     return count
 
 
@@ -413,8 +413,8 @@ def integrate(values, origin, resolution, free, hits, x0, y0, cos_t, sin_t, miss
     marks = np.zeros((size_x, size_y), dtype=np.uint8)  # 1: a beam crosses the cell, 2: a beam ends in it
     rows = np.empty(free.shape[0] + hits.shape[0], dtype=np.int32)
     columns = np.empty_like(rows)
-    count = _mark(free, 1, marks, rows, columns, 0, origin, resolution, x0, y0, cos_t, sin_t)
-    count = _mark(hits, 2, marks, rows, columns, count, origin, resolution, x0, y0, cos_t, sin_t)
+    count = mark(free, 1, marks, rows, columns, 0, origin, resolution, x0, y0, cos_t, sin_t)
+    count = mark(hits, 2, marks, rows, columns, count, origin, resolution, x0, y0, cos_t, sin_t)
     changed = np.zeros((size_x // tile_size, size_y // tile_size), dtype=np.bool_)
     tile_row, tile_column = np.arange(size_x) // tile_size, np.arange(size_y) // tile_size
     low, high = np.float32(-clamp), np.float32(clamp)

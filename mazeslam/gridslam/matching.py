@@ -185,7 +185,8 @@ def refine_pose(
     near a wall weigh ``1 / s^2``, points far from all walls nothing (``kernels.refine``).
     """
     start = np.array(prior if start is None else start, dtype=float)
-    return field.kernels.refine(field.kernel_field, *_prior(points, prior, prior_information), _settings(params), start)
+    arguments = (*_prior(points, prior, prior_information), kernel_settings(params), start)
+    return field.kernels.refine(field.kernel_field, *arguments)
 
 
 def match_pose(
@@ -193,7 +194,7 @@ def match_pose(
 ) -> tuple[np.ndarray, float]:
     """``refine_pose`` from ``prior`` and the ``overlap`` of the result: the pose (3,) and the
     share of ``points`` (N, 2) within ``overlap_distance`` of an occupied cell there."""
-    arguments = (*_prior(points, prior, prior_information), _settings(params), params.overlap_distance)
+    arguments = (*_prior(points, prior, prior_information), kernel_settings(params), params.overlap_distance)
     pose, share = field.kernels.match(field.kernel_field, *arguments)
     return pose, float(share)
 
@@ -203,7 +204,7 @@ def _prior(points: np.ndarray, prior: np.ndarray, information: np.ndarray) -> tu
     return _points(points), np.asarray(prior, dtype=float), np.ascontiguousarray(information, dtype=float)
 
 
-def _settings(params: MatchParams) -> tuple:
+def kernel_settings(params: MatchParams) -> tuple:
     """The refinement's settings as ``kernels.refine`` takes them: (sigmas (S,) m, iterations,
     scale, floor)."""
     return np.asarray(params.sigma_schedule, dtype=float), params.iterations, params.scale, params.floor

@@ -87,11 +87,8 @@ class TiledGrid:
         return self.params.tile_size * self.params.resolution
 
     def tile_range(self, points: np.ndarray, margin: float) -> tuple[np.ndarray, np.ndarray]:
-        """The tiles (lower (..., 2), upper (..., 2), upper exclusive) covering ``points`` (..., N, 2)
-        (world, m) widened by ``margin`` metres (one range per leading index)."""
-        lower = np.floor((points.min(axis=-2) - margin) / self.tile_metres).astype(int)
-        upper = np.floor((points.max(axis=-2) + margin) / self.tile_metres).astype(int) + 1
-        return lower, upper
+        """The tiles covering ``points`` (..., N, 2) (world, m) widened by ``margin`` m (``tile_range``)."""
+        return tile_range(points, margin, self.tile_metres)
 
     def window(self, lower: np.ndarray, upper: np.ndarray) -> Window:
         """The cells of tiles ``lower`` .. ``upper`` (exclusive) as one dense array to read and edit."""
@@ -121,6 +118,15 @@ class TiledGrid:
         keys = np.array(list(self.tiles))
         window = self.window(keys.min(axis=0), keys.max(axis=0) + 1)
         return window.values, window.origin
+
+
+def tile_range(points: np.ndarray, margin: float, tile_metres: float) -> tuple[np.ndarray, np.ndarray]:
+    """The tiles (lower (..., 2), upper (..., 2), upper exclusive) of side ``tile_metres`` (m)
+    covering ``points`` (..., N, 2) (world, m) widened by ``margin`` metres (one range per leading
+    index)."""
+    lower = np.floor((points.min(axis=-2) - margin) / tile_metres).astype(int)
+    upper = np.floor((points.max(axis=-2) + margin) / tile_metres).astype(int) + 1
+    return lower, upper
 
 
 @dataclass
@@ -235,15 +241,6 @@ def integrate_scan(window: Window, rays: ScanRays, pose: np.ndarray, params: Gri
         params.clamp,
         params.tile_size,
     )
-
-
-def distinct_tile_bytes(grids: list[TiledGrid]) -> int:
-    """Bytes of cells held by ``grids`` together, each shared tile counted once (every tile is a
-    ``tile_size`` square of float32)."""
-    if not grids:
-        return 0
-    distinct = set().union(*(map(id, grid.tiles.values()) for grid in grids))
-    return len(distinct) * grids[0].params.tile_size ** 2 * np.dtype(np.float32).itemsize
 
 
 def grid_states(grid: TiledGrid, occupied_above: float = 0.0, free_below: float = 0.0) -> OccupancyMap:

@@ -269,7 +269,7 @@ class GridLiveView(FilterView):
         from mazeslam.gridslam.snapshots import snapshot
         from mazeslam.viz.grid_animation import occupancy_corners
 
-        frame = snapshot(len(self.path) - 1, slam.maps[slam.best_particle()], slam.poses)
+        frame = snapshot(len(self.path) - 1, slam.map_of(slam.best_particle()), slam.poses)
         path = np.array(self.path)
         area = np.vstack([occupancy_corners(frame.occupancy), path[:, :2], self.low, self.high])
         self.view.frame_area(area.min(axis=0), area.max(axis=0))

@@ -3,8 +3,9 @@ numpy for the scan match and the ray integration, and OpenCV's distance transfor
 each scan for the likelihood field. The oracle the compiled filter is checked against
 (tests/gridslam/test_grid_kernels.py) and its speed baseline (benchmarks/bench_grid.py).
 
-``ReferenceGridSlam(params, start_pose, sensor)`` subclasses ``GridSlam`` only to share its state,
-its resampling and its cloud; the scan update is the old one.
+``ReferenceGridSlam(params, start_pose, sensor)`` subclasses ``GridSlam`` only to share its poses,
+weights, resampling and cloud; its maps are the old ones (a ``TiledGrid`` a particle, not the
+filter's tile pool) and its scan update is the old one.
 """
 
 from __future__ import annotations
@@ -16,7 +17,7 @@ from mazeslam.core.motion import predict_relative
 from mazeslam.core.resampling import effective_sample_size
 from mazeslam.gridslam.filter import STENCIL, GridSlam, ScanUpdate, _weighted_nis, motion_nis
 from mazeslam.gridslam.matching import MatchParams, match_points
-from mazeslam.gridslam.occupancy import GridParams, ScanRays, Window, scan_rays
+from mazeslam.gridslam.occupancy import GridParams, ScanRays, TiledGrid, Window, scan_rays
 from mazeslam.registration.correlative import LikelihoodGrid, correlative_candidates
 
 
@@ -147,6 +148,21 @@ def integrate_scan(window: Window, rays: ScanRays, pose: np.ndarray, params: Gri
 
 class ReferenceGridSlam(GridSlam):
     """The grid filter's scan update as a Python loop over particles (see the module docstring)."""
+
+    def __init__(self, params, start_pose, sensor):
+        super().__init__(params, start_pose, sensor)
+        self.maps = [TiledGrid(params.grid) for _ in range(params.particles)]
+
+    def map_of(self, particle: int) -> TiledGrid:
+        return self.maps[particle]
+
+    def held_bytes(self) -> int:
+        """Bytes of cells all particles' maps hold together, each shared tile counted once."""
+        distinct = set().union(*(map(id, grid.tiles.values()) for grid in self.maps))
+        return len(distinct) * self.params.grid.tile_size**2 * np.dtype(np.float32).itemsize
+
+    def _keep_maps(self, indexes: np.ndarray) -> None:
+        self.maps = [self.maps[index].copy() for index in indexes]
 
     def process(self, ranges: np.ndarray, motion: np.ndarray) -> ScanUpdate:
         """Move every particle by ``motion`` (3,) (robot frame, since the last processed scan) with

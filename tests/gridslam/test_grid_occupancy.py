@@ -8,7 +8,7 @@ from mazeslam.core.geometry import transform_points
 from mazeslam.gridslam import GridSlam, GridSlamParams
 from mazeslam.gridslam.filter import ScanSensor
 from mazeslam.gridslam.matching import LikelihoodField, MatchParams, match_points, refine_pose
-from mazeslam.gridslam.occupancy import GridParams, TiledGrid, distinct_tile_bytes, integrate_scan, scan_rays
+from mazeslam.gridslam.occupancy import GridParams, TiledGrid, integrate_scan, scan_rays
 from mazeslam.sim.building import LASER, building_walls
 from mazeslam.sim.laser import VirtualLaser
 
@@ -92,14 +92,15 @@ def test_resampling_copies_no_tile_and_the_cloud_costs_about_one_map():
     rng = np.random.default_rng(0)
     for x in (1.0, 1.5, 2.0):
         slam.process(laser.scan(np.array([x, 1.0, 0.0]), rng), np.array([0.5 if x > 1.0 else 0.0, 0.0, 0.0]))
-    one_map = distinct_tile_bytes([slam.maps[0]])
-    assert distinct_tile_bytes(slam.maps) > 3 * one_map  # each particle wrote its own tiles
+    tile_bytes = slam.params.grid.tile_size**2 * 4
+    one_map = np.count_nonzero(slam.pool.table[0] >= 0) * tile_bytes
+    assert slam.held_bytes() > 3 * one_map  # each particle wrote its own tiles
     slam.log_weights[:] = -1e9
     slam.log_weights[7] = 0.0  # one particle holds all the weight: every survivor descends from it
-    tiles_of_seven = {id(tile) for tile in slam.maps[7].tiles.values()}
+    slots_of_seven = slam.pool.table[7].copy()
     assert slam._resample_if_needed() is not None
-    assert all({id(tile) for tile in grid.tiles.values()} == tiles_of_seven for grid in slam.maps)
-    assert distinct_tile_bytes(slam.maps) == one_map
+    assert all(np.array_equal(table, slots_of_seven) for table in slam.pool.table)
+    assert slam.held_bytes() == one_map
 
 
 def test_the_matcher_recovers_a_displaced_pose_against_a_map():
@@ -131,7 +132,7 @@ def test_the_filter_clears_along_beams_with_no_return_when_asked_and_the_sensors
     params = GridSlamParams(particles=2, grid=GridParams(clear_no_return=clear))
     slam = GridSlam(params, np.zeros(3), ScanSensor(bearings, MOUNT, max_range=sensor_range))
     slam.process(nothing, np.zeros(3))
-    grid = slam.maps[0]
+    grid = slam.map_of(0)
     if not clears:
         assert not grid.tiles
         return

@@ -1,0 +1,120 @@
+"""Every particle's occupancy grid in one pool of tiles, shared copy-on-write.
+
+The grid filter's particles each own a log-odds grid (``TiledGrid``'s cells and tiles: world frame,
+cell ``(i, j)`` covers ``[i r, (i + 1) r) x [j r, (j + 1) r)``, tile ``(a, b)`` the cells ``a T .. a T + T
+- 1`` by ``b T .. b T + T - 1``). Here they are kept together, so that one compiled call can read and
+write every particle's grid (``mazeslam.gridslam.batch``):
+
+- ``tiles`` (capacity, T, T) float32: the log-odds of every tile any particle holds;
+- ``table`` (P, A, B) int32: particle ``p``'s tile at key ``lower + (a, b)`` is ``tiles[table[p, a, b]]``,
+  -1 where it has none (unknown, log-odds 0);
+- ``owners`` (capacity,) int32: how many entries of ``table`` hold each slot (0: free).
+
+A resampling copies rows of ``table``; the particles that descend from one ancestor share its slots.
+A write to a slot with more than one owner first copies it to a free slot (copy on write), a write
+to a slot with one owner changes it in place. Memory grows with the tiles the particles changed
+since they parted, not with the particles times the map.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from mazeslam.gridslam.occupancy import GridParams, TiledGrid, Window
+
+#: Slots the pool grows by at least, as a share of its capacity (growing copies every tile).
+GROWTH = 0.5
+
+
+class TilePool:
+    """The log-odds grids of ``particles`` particles (see the module docstring), all empty at first.
+
+    Attributes:
+        params: the grid's cells (``GridParams``).
+        tiles: (capacity, T, T) float32 log-odds; owners (capacity,) int32 the table entries per slot.
+        free: (capacity,) int32, its first ``free_count[0]`` entries the free slots (a stack).
+        table: (P, A, B) int32 slot of each particle's tile at key ``lower + (a, b)``, -1 none.
+        lower: (2,) int64 tile key of ``table[:, 0, 0]``.
+    """
+
+    def __init__(self, params: GridParams, particles: int, capacity: int = 64):
+        self.params = params
+        size = params.tile_size
+        self.tiles = np.zeros((capacity, size, size), dtype=np.float32)
+        self.owners = np.zeros(capacity, dtype=np.int32)
+        self.free = np.arange(capacity, dtype=np.int32)[::-1].copy()
+        self.free_count = np.array([capacity], dtype=np.int64)
+        self.table = np.full((particles, 0, 0), -1, dtype=np.int32)
+        self.lower = np.zeros(2, dtype=np.int64)
+
+    @property
+    def tile_metres(self) -> float:
+        return self.params.tile_size * self.params.resolution
+
+    def cover(self, lower: np.ndarray, upper: np.ndarray) -> None:
+        """Widen ``table`` so that it holds the tile keys ``lower`` .. ``upper`` (each (2,), upper
+        exclusive); new entries are -1."""
+        lower, upper = np.asarray(lower, dtype=np.int64), np.asarray(upper, dtype=np.int64)
+        shape = np.array(self.table.shape[1:])
+        if shape.all():
+            lower, upper = np.minimum(lower, self.lower), np.maximum(upper, self.lower + shape)
+        if np.array_equal(lower, self.lower) and np.array_equal(upper - lower, shape):
+            return
+        table = np.full((len(self.table), *(upper - lower)), -1, dtype=np.int32)
+        a, b = self.lower - lower
+        table[:, a : a + shape[0], b : b + shape[1]] = self.table
+        self.table, self.lower = table, lower
+
+    def reserve(self, slots: int) -> None:
+        """Make at least ``slots`` slots free, growing the pool (by at least ``GROWTH`` of it)."""
+        missing = slots - int(self.free_count[0])
+        if missing <= 0:
+            return
+        capacity = len(self.tiles)
+        added = max(missing, int(GROWTH * capacity))
+        size = self.params.tile_size
+        self.tiles = np.concatenate([self.tiles, np.zeros((added, size, size), dtype=np.float32)])
+        self.owners = np.concatenate([self.owners, np.zeros(added, dtype=np.int32)])
+        added_slots = np.arange(capacity, capacity + added, dtype=np.int32)[::-1]
+        free = np.concatenate([added_slots, self.free[: self.free_count[0]]])
+        self.free = np.concatenate([free, np.zeros(capacity + added - len(free), dtype=np.int32)])
+        self.free_count[0] = len(free)
+
+    def resample(self, indexes: np.ndarray) -> None:
+        """Keep the particles ``indexes`` (P,), in that order: their tables, sharing their slots."""
+        self.table = self.table[indexes]
+        self._count_owners()
+
+    def _count_owners(self) -> None:
+        """``owners`` and the free stack from ``table``."""
+        held = self.table[self.table >= 0]
+        self.owners = np.bincount(held, minlength=len(self.tiles)).astype(np.int32)
+        free = np.flatnonzero(self.owners == 0).astype(np.int32)[::-1]
+        self.free[: len(free)], self.free_count[0] = free, len(free)
+
+    def has_tiles(self, particle: int) -> bool:
+        """Whether ``particle`` holds any tile (has mapped anything)."""
+        return bool((self.table[particle] >= 0).any())
+
+    def held_bytes(self) -> int:
+        """Bytes of cells the particles hold together, each shared tile counted once."""
+        return int(np.count_nonzero(self.owners)) * self.params.tile_size**2 * np.dtype(np.float32).itemsize
+
+    def grid(self, particle: int) -> TiledGrid:
+        """``particle``'s map as a ``TiledGrid`` of its own (copies of its tiles)."""
+        a, b = np.nonzero(self.table[particle] >= 0)
+        slots = self.table[particle, a, b]
+        keys = zip((a + self.lower[0]).tolist(), (b + self.lower[1]).tolist())
+        return TiledGrid(self.params, {key: self.tiles[slot].copy() for key, slot in zip(keys, slots)})
+
+    def window(self, particle: int, lower: np.ndarray, upper: np.ndarray) -> Window:
+        """``particle``'s cells of tiles ``lower`` .. ``upper`` (each (2,), upper exclusive) as one
+        dense array (a copy), as ``TiledGrid.window`` gives them."""
+        from mazeslam.gridslam import batch  # here, not at the top: numba loads only where the grid filter runs
+
+        lower, upper = np.asarray(lower, dtype=np.int64), np.asarray(upper, dtype=np.int64)
+        self.cover(lower, upper)
+        size = self.params.tile_size
+        values = np.empty(((upper[0] - lower[0]) * size, (upper[1] - lower[1]) * size), dtype=np.float32)
+        batch.gather(self.tiles, self.table[particle], self.lower, size, lower * size, values)
+        return Window(values, lower * self.tile_metres, self.params.resolution, lower)
