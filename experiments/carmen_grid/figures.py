@@ -1,4 +1,4 @@
-"""Each log's grid map (results/<log>_seed0/occupancy.png with its .yaml) beside the log's own
+"""Each log's grid map (results/<log>_seed0/occupancy.yaml and the .pgm it names) beside the log's own
 picture (shared/data/carmen/<log>-corrected.png): results/<log>_compare.png.
 
 Run after run.py: ``python -m experiments.carmen_grid.figures``. Ours is drawn in the filter's frame
@@ -17,6 +17,7 @@ import yaml  # noqa: E402
 from matplotlib.patches import Patch  # noqa: E402
 
 from experiments.carmen_grid.run import CARMEN, LOGS, RESULTS  # noqa: E402
+from mazeslam.data.map_io import read_map, to_image  # noqa: E402
 
 PIXELS = 600  # the longer side of each panel's image: larger maps are shrunk to it
 
@@ -34,7 +35,7 @@ def shrunk(image: np.ndarray) -> tuple[np.ndarray, int]:
 
 def compare(name: str) -> None:
     folder = RESULTS / f"{name}_seed0"
-    ours, factor = shrunk(plt.imread(folder / "occupancy.png"))
+    ours, factor = shrunk(to_image(read_map(folder / "occupancy.yaml").states) / 255.0)
     meta = yaml.safe_load((folder / "occupancy.yaml").read_text())
     resolution, (x0, y0, _) = meta["resolution"], meta["origin"]
     height, width = ours.shape[0] * factor, ours.shape[1] * factor
@@ -73,7 +74,7 @@ def compare(name: str) -> None:
 
 def main() -> None:
     for name in LOGS:
-        if (RESULTS / f"{name}_seed0" / "occupancy.png").exists():
+        if (RESULTS / f"{name}_seed0" / "occupancy.yaml").exists():
             compare(name)
 
 

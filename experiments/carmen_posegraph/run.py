@@ -129,10 +129,16 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--logs", nargs="+", default=LOGS)
     parser.add_argument("--jobs", type=int, default=1)
+    parser.add_argument(
+        "--summary-only",
+        action="store_true",
+        help="rewrite results/summary.md from results/table.csv without running (after experiments/carmen_grid reruns)",
+    )
     args = parser.parse_args()
     RESULTS.mkdir(parents=True, exist_ok=True)
     path = RESULTS / "table.csv"
-    run_jobs(run_one, [(name,) for name in args.logs], args.jobs, path, ["log"])
+    if not args.summary_only:
+        run_jobs(run_one, [(name,) for name in args.logs], args.jobs, path, ["log"])
     (RESULTS / "summary.md").write_text(summary(pd.read_csv(path)))
 
 

@@ -22,8 +22,8 @@ import numpy as np
 
 from mazeslam.gridslam.occupancy import GridParams, TiledGrid, Window
 
-#: Slots the pool grows by at least, as a share of its capacity (growing copies every tile).
-GROWTH = 0.5
+#: Slots the pool grows by at least, as a share of its capacity: the slack it may hold unused.
+GROWTH = 0.1
 
 
 class TilePool:
@@ -66,19 +66,21 @@ class TilePool:
         self.table, self.lower = table, lower
 
     def reserve(self, slots: int) -> None:
-        """Make at least ``slots`` slots free, growing the pool (by at least ``GROWTH`` of it)."""
+        """Make at least ``slots`` slots free, growing the pool (by at least ``GROWTH`` of it) in
+        place: the arrays are reallocated, not copied beside the old ones, so that growing never
+        holds the pool twice (nothing else may hold a view of them)."""
         missing = slots - int(self.free_count[0])
         if missing <= 0:
             return
         capacity = len(self.tiles)
         added = max(missing, int(GROWTH * capacity))
         size = self.params.tile_size
-        self.tiles = np.concatenate([self.tiles, np.zeros((added, size, size), dtype=np.float32)])
-        self.owners = np.concatenate([self.owners, np.zeros(added, dtype=np.int32)])
-        added_slots = np.arange(capacity, capacity + added, dtype=np.int32)[::-1]
-        free = np.concatenate([added_slots, self.free[: self.free_count[0]]])
-        self.free = np.concatenate([free, np.zeros(capacity + added - len(free), dtype=np.int32)])
-        self.free_count[0] = len(free)
+        self.tiles.resize((capacity + added, size, size), refcheck=False)  # the new tiles are zero
+        self.owners.resize(capacity + added, refcheck=False)
+        self.free.resize(capacity + added, refcheck=False)
+        count = int(self.free_count[0])
+        self.free[count : count + added] = np.arange(capacity + added - 1, capacity - 1, -1, dtype=np.int32)
+        self.free_count[0] = count + added
 
     def resample(self, indexes: np.ndarray) -> None:
         """Keep the particles ``indexes`` (P,), in that order: their tables, sharing their slots."""

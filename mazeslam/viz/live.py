@@ -62,18 +62,36 @@ class Pacing:
         self._started: float | None = None
         self._first = 0.0
 
-    def wait(self, index: int) -> float:
-        """Seconds to wait before showing record ``index`` (0 when it is due or late)."""
+    def lateness(self, index: int) -> float:
+        """How late record ``index`` is now, s (negative: early by that much; the first record shown
+        is on time)."""
         now = self.clock()
         if self._started is None:
             self._started, self._first = now, float(self.times[index])
-        due = self._started + (self.times[index] - self._first) / self.speed
-        return max(0.0, due - now)
+        return now - (self._started + (self.times[index] - self._first) / self.speed)
+
+    def wait(self, index: int) -> float:
+        """Seconds to wait before showing record ``index`` (0 when it is due or late)."""
+        return max(0.0, -self.lateness(index))
 
     def hold(self, seconds: float) -> None:
         """Time spent paused does not count against the log's pace."""
         if self._started is not None:
             self._started += seconds
+
+
+class WindowClock:
+    """The live window's clock: the wall clock, waited on with the window kept responsive."""
+
+    def now(self) -> float:
+        """Seconds on the wall clock (``time.perf_counter``)."""
+        return time.perf_counter()
+
+    def wait(self, seconds: float) -> None:
+        """Let ``seconds`` pass, the window drawing and answering keys meanwhile."""
+        import matplotlib.pyplot as plt
+
+        plt.pause(seconds)
 
 
 class FilterView:
@@ -86,17 +104,24 @@ class FilterView:
     frame open until the window is closed. Frames are drawn at most ``max_fps`` times a second and
     never sooner than the last one took (off-screen too, where nothing waits for the log's pace).
 
+    ``clock`` (an object with ``now()`` and ``wait(seconds)``, default ``WindowClock``) is the time
+    the view paces the log and throttles frames by. Given one, the view plays the log at its pace
+    off-screen too, waiting on that clock: a replay on a simulated clock
+    (``benchmarks/bench_grid.py`` measures whether the grid filter keeps up this way).
+
     Attributes:
         frames: how many frames were drawn.
         window: whether they went to a window on screen.
         message: what to tell the user when there is no window (None when there is).
         path: the filter's mean pose (3,) after each update.
+        lateness: how late each paced update ended after its record was due, s (negative: early;
+            empty where the log is not paced).
         paused: the window's pause key was pressed (and not again).
     """
 
     view: Any
 
-    def __init__(self, times: np.ndarray, max_fps: float, speed: float = 1.0):
+    def __init__(self, times: np.ndarray, max_fps: float, speed: float = 1.0, clock=None):
         import matplotlib.pyplot as plt
 
         self.window, backend = window_backend()
@@ -107,9 +132,12 @@ class FilterView:
         )
         if self.window:
             plt.ion()
-        self.pacing = Pacing(times, speed)
+        self.paced = self.window or clock is not None
+        self.clock = WindowClock() if clock is None else clock
+        self.pacing = Pacing(times, speed, self.clock.now)
         self.max_fps = max_fps
         self.path: list[np.ndarray] = []
+        self.lateness: list[float] = []
         self.frames, self.drawing_seconds = 0, 0.0
         self.paused = False
         self._last, self._last_cost = -np.inf, 0.0
@@ -138,28 +166,26 @@ class FilterView:
 
     def __call__(self, index: int, slam) -> None:
         self.path.append(self.mean_pose(slam))
-        if self.window:
-            if not self.open:
-                return  # closed by the user: the filter goes on without it
+        if self.window and not self.open:
+            return  # closed by the user: the filter goes on without it
+        if self.paced:
             self._keep_pace(index)
-        now = time.perf_counter()
+        now = self.clock.now()
         if now - self._last < max(1.0 / self.max_fps, self._last_cost):
             return
         self.draw(index, slam)
-        self._last = time.perf_counter()
+        self._last = self.clock.now()
         self._last_cost = self._last - now
         self.drawing_seconds += self._last_cost
 
     def _keep_pace(self, index: int) -> None:
         """Wait (the window responsive meanwhile) while paused and until record ``index`` is due."""
-        import matplotlib.pyplot as plt
-
         while self.paused and self.open:
-            plt.pause(IDLE_SECONDS)
+            self.clock.wait(IDLE_SECONDS)
             self.pacing.hold(IDLE_SECONDS)
-        wait = self.pacing.wait(index)
-        if wait > 0 and self.open:
-            plt.pause(wait)
+        self.lateness.append(self.pacing.lateness(index))
+        if self.lateness[-1] < 0 and (self.open or not self.window):
+            self.clock.wait(-self.lateness[-1])
 
     def draw(self, index: int, slam) -> None:
         """Draw one frame of the filter's state after record ``index``."""
@@ -203,12 +229,12 @@ class LiveView(FilterView):
     """``on_update`` for ``run_slam`` with corner FastSLAM: its particles, the best particle's map,
     the current scan and its corners, in a window (or off-screen; ``FilterView``)."""
 
-    def __init__(self, run, corner_params, title: str = "", max_fps: float = 5.0, speed: float = 1.0):
+    def __init__(self, run, corner_params, title: str = "", max_fps: float = 5.0, speed: float = 1.0, clock=None):
         import matplotlib.pyplot as plt
 
         from mazeslam.features.corners import CornerExtractor
 
-        super().__init__(run.log.times, max_fps, speed)
+        super().__init__(run.log.times, max_fps, speed, clock)
         self.run = run
         self.extractor = CornerExtractor(run.geometry, run.log.width, corner_params) if run.log.n_beams else None
         self.mount = np.array([run.geometry.mount_x, run.geometry.mount_y])
@@ -247,12 +273,12 @@ class GridLiveView(FilterView):
     the particles and the truth when the log has one (``GridView``), in a window (or off-screen;
     ``FilterView``)."""
 
-    def __init__(self, run, title: str = "", max_fps: float = 5.0, speed: float = 1.0):
+    def __init__(self, run, title: str = "", max_fps: float = 5.0, speed: float = 1.0, clock=None):
         import matplotlib.pyplot as plt
 
         from mazeslam.viz.grid_animation import GridView
 
-        super().__init__(run.log.times, max_fps, speed)
+        super().__init__(run.log.times, max_fps, speed, clock)
         self.run, self.scans = run, int(run.log.is_scan.sum())
         start = np.asarray(run.start_pose, dtype=float)[:2]
         self.low, self.high = start.copy(), start.copy()

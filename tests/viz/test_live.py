@@ -230,3 +230,41 @@ def test_pacing_waits_for_each_record_and_never_for_a_late_one():
     assert pacing.wait(4) == 0.0
     with pytest.raises(ValueError, match="speed must be positive"):
         Pacing(np.zeros(2), speed=0.0)
+
+
+class SteppedClock:
+    """A ``FilterView`` clock: each reading first advances it by ``cost`` (the work since the last
+    reading), ``wait`` advances it at once."""
+
+    def __init__(self, cost: float):
+        self.time, self.cost, self.waits = 0.0, cost, []
+
+    def now(self) -> float:
+        self.time += self.cost
+        return self.time
+
+    def wait(self, seconds: float) -> None:
+        self.waits.append(seconds)
+        self.time += seconds
+
+
+@pytest.mark.parametrize("cost", [0.0, 30.0])
+def test_an_off_screen_view_given_a_clock_plays_the_log_at_its_pace_on_it(short_log, monkeypatch, cost):
+    """A fast filter waits for each scan (early by the log's gap between updates), a slow one never
+    waits and is late (the first update sets the clock)."""
+    from mazeslam.viz import live
+
+    monkeypatch.setenv("MPLBACKEND", "Agg")
+    run = load_run(short_log)
+    clock = SteppedClock(cost)
+    view = live.LiveView(run, SlamConfig().corners, "short.log", max_fps=1e9, clock=clock)
+    assert not view.window
+    run_slam(run, progress=False, on_update=view)
+    view.close(keep_open=False)
+    gaps = np.diff(run.log.times[run.log.is_scan])  # corner FastSLAM updates at each scan
+    assert len(view.lateness) == len(gaps) + 1 and view.lateness[0] == 0.0
+    if cost == 0.0:
+        np.testing.assert_allclose(view.lateness[1:], -gaps, atol=1e-9)
+        np.testing.assert_allclose(clock.waits, gaps[gaps > 0], atol=1e-9)
+    else:
+        assert min(view.lateness[1:]) > 0 and not clock.waits
