@@ -1,10 +1,11 @@
 """Compile the grid filter's kernels into numba's cache before a first run needs them.
 
 ``python -m mazeslam.gridslam.precompile`` (``make install`` runs it) runs the filter, in both
-search modes, over a few noise-free scans of a rectangular room: that calls every kernel with the
-argument types a real run passes, so numba compiles each once (about 10 s) and later runs load them
-from the cache (``mazeslam.gridslam.kernels``). Without it the first grid run on a machine compiles
-them itself.
+search modes, over a few noise-free scans of a rectangular room, and one match as a failed match's
+rescue runs it: that calls every kernel with the argument types a real run passes, so numba
+compiles each once (about 15 s) and later runs load them from the cache
+(``mazeslam.gridslam.kernels``, ``mazeslam.gridslam.batch``). Without it the first grid run on a
+machine compiles them itself.
 """
 
 from __future__ import annotations
@@ -16,6 +17,8 @@ import numpy as np
 from mazeslam.core.beams import BeamGeometry
 from mazeslam.data.log import ODOMETRY, SCAN, CourseLog
 from mazeslam.gridslam.filter import GridSlamParams, MotionSource, SearchMode, run_grid_slam
+from mazeslam.gridslam.matching import LikelihoodField, MatchParams, match_pose
+from mazeslam.gridslam.occupancy import GridParams, Window
 
 #: The room: lower and upper corner of its walls, m.
 ROOM = np.array([[-1.0, -1.5], [4.0, 1.5]])
@@ -49,12 +52,29 @@ def room_log(scans: int = 6) -> tuple[CourseLog, BeamGeometry]:
     return CourseLog(np.array(times), np.array(flags), np.array(rows)), geometry
 
 
+def rescue_match() -> None:
+    """One match as a particle's rescue runs it, particle by particle (``match_pose`` on a view of a
+    window, not on the batch's gathered cells): the room's scans never make a match fail."""
+    params = GridParams()
+    window = Window(
+        np.zeros((2 * params.tile_size, 2 * params.tile_size), dtype=np.float32),
+        np.zeros(2),
+        0.05,
+        np.zeros(2, dtype=int),
+    )
+    window.values[10:100, 40] = 1.0  # a wall
+    field = LikelihoodField(window.view(np.array([1, 1]), np.array([120, 120])), MatchParams())
+    points = np.column_stack([np.full(20, 0.5), np.linspace(-1.0, 1.0, 20)])
+    match_pose(field, points, np.array([1.5, 2.5, 0.0]), np.eye(3), MatchParams())
+
+
 def main() -> None:
     began = time.perf_counter()
     course_log, geometry = room_log()
     for search in SearchMode:
         params = GridSlamParams(particles=3, motion=MotionSource.WHEELS, search=search)
         run_grid_slam(course_log, geometry, np.zeros(3), params)
+    rescue_match()
     print(f"the grid filter's kernels are compiled and cached ({time.perf_counter() - began:.1f} s)")
 
 
