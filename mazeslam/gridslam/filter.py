@@ -2,9 +2,9 @@
 for grid mapping with Rao-Blackwellized particle filters", IEEE T-RO 2007: the method of gmapping).
 
 Each particle is a robot pose, a log weight and its own occupancy grid (its tiles in the cloud's
-``TilePool``, shared copy-on-write with its relatives). A scan is processed once the robot has moved ``linear_update``
-metres or turned ``angular_update`` radians since the last processed scan, with the motion
-accumulated in between (``u``). For each particle, at its previous pose ``x'``:
+``TilePool``, shared copy-on-write with its relatives). A scan is processed once the robot has
+moved ``linear_update`` metres or turned ``angular_update`` radians since the last processed scan,
+with the motion accumulated in between (``u``). For each particle, at its previous pose ``x'``:
 
 1. predict ``x^ = x' (+) u`` and match the scan against the particle's own map from there
    (``refine_pose``: likelihood field times the motion prior ``N(x^, Q(u))``), giving the mode ``x*``;
@@ -20,13 +20,13 @@ the particle's occupied cells) seeds the refinement again. With ``search = "ever
 runs once at every scan, over a wider window (``every_scan_sigma``), for logs whose motion between
 scans can be a metre or a right angle wrong (a laser odometry matched without wheel odometry).
 When the match still fails the stencil is centred on ``x^`` for the weight and the pose is drawn
-from the motion model. Then the scan is ray-traced into the particle's map at its new pose. Steps 1-3 and the ray
-tracing run for all particles in one compiled call each (``mazeslam.gridslam.batch``); a
-particle whose match fails, and every particle with the search at every scan, goes through the
-rescue and refinements one by one. Weights
-are tempered as gmapping does (log weights divided by ``observation_gain`` times the particle
-count) and the particles are resampled (systematic) only when the effective sample size falls
-below ``resample_threshold`` times their count.
+from the motion model. Then the scan is ray-traced into the particle's map at its new pose. Steps
+1-3 and the ray tracing run for all particles in one compiled call each
+(``mazeslam.gridslam.batch``); a particle whose match fails, and every particle with the search at
+every scan, goes through the rescue and refinements one by one. Weights are tempered as gmapping
+does (log weights divided by ``observation_gain`` times the particle count) and the particles are
+resampled (systematic) only when the effective sample size falls below ``resample_threshold``
+times their count.
 
 The motion ``u`` between scans comes from the project's laser odometry (``laser_odometry``, scan to
 scan ICP with the wheel odometry as prior), or from the log's odometry records alone.
@@ -266,7 +266,7 @@ class Proposal:
     covariance: np.ndarray
 
 
-@dataclass(frozen=True)
+@dataclass
 class Proposals:
     """Every particle's improved proposal (``Proposal``'s fields, one row a particle).
 
