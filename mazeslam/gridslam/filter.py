@@ -20,10 +20,11 @@ the particle's occupied cells) seeds the refinement again. With ``search = "ever
 runs once at every scan, over a wider window (``every_scan_sigma``), for logs whose motion between
 scans can be a metre or a right angle wrong (a laser odometry matched without wheel odometry).
 When the match still fails the stencil is centred on ``x^`` for the weight and the pose is drawn
-from the motion model. Then the scan is ray-traced into the particle's map at its new pose. Steps
-1-3 and the ray tracing run for all particles in one compiled call each
-(``mazeslam.gridslam.batch``); a particle whose match fails, and every particle with the search at
-every scan, goes through the rescue and refinements one by one. Weights are tempered as gmapping
+from the motion model. Then the scan is ray-traced into the particle's map at its new pose. The
+matches, the stencils and the ray tracing run for all particles in one compiled call each
+(``mazeslam.gridslam.kernels``: ``match_all``, ``integrate_all``); a particle whose match fails,
+and every particle with the search at every scan, goes through the rescue and refinements one by
+one. Weights are tempered as gmapping
 does (log weights divided by ``observation_gain`` times the particle count) and the particles are
 resampled (systematic) only when the effective sample size falls below ``resample_threshold``
 times their count.
@@ -417,7 +418,7 @@ class GridSlam:
         lower and upper (P, 2)). ``starts`` (P, 1 + C, 3): its prediction and the refinements'
         other starts (``_searched_offsets``); ``mapped`` (P,): it has a map. Without the search at
         every scan the matches and stencils run for all particles in one compiled call
-        (``mazeslam.gridslam.batch.match_all``), and only the particles whose match failed are
+        (``mazeslam.gridslam.kernels.match_all``), and only the particles whose match failed are
         rescued one by one."""
         proposals = Proposals.empty(predicted)
         if seen is None:
@@ -453,15 +454,15 @@ class GridSlam:
         mapped: np.ndarray,
     ) -> np.ndarray:
         """Every particle's match and, where accepted, its proposal's moments into ``proposals``, in
-        one compiled call (``batch.match_all``) over the cells ``crops`` (low, high (P, 2)) of its
+        one compiled call (``kernels.match_all``) over the cells ``crops`` (low, high (P, 2)) of its
         ``windows`` (tiles, lower and upper (P, 2)). Returns the particles whose match failed (P',):
         ``_propose`` rescues them."""
-        from mazeslam.gridslam import batch  # here, not at the top: numba loads only where the grid filter runs
+        from mazeslam.gridslam import kernels  # here, not at the top: numba loads only where the grid filter runs
 
         lowers, _ = windows
         low, high = crops
         size, match = self.params.grid.tile_size, self.params.match
-        status, modes, log_etas, means, covariances = batch.match_all(
+        status, modes, log_etas, means, covariances = kernels.match_all(
             self.pool.tiles,
             self.pool.table,
             self.pool.lower,
@@ -483,25 +484,25 @@ class GridSlam:
             match.floor,
             float(match.occupied_threshold),
         )
-        accepted = status == batch.ACCEPTED
+        accepted = status == kernels.ACCEPTED
         proposals.accepted[:] = accepted
         proposals.centres[accepted] = modes[accepted]
         proposals.log_etas[accepted] = log_etas[accepted]
         proposals.means[accepted], proposals.covariances[accepted] = means[accepted], covariances[accepted]
-        return np.flatnonzero(status == batch.FAILED)
+        return np.flatnonzero(status == kernels.FAILED)
 
     def _integrate(self, rays: ScanRays, windows: tuple[np.ndarray, np.ndarray]) -> None:
         """Add the scan ``rays`` to every particle's map at its pose, within its window (tiles,
         lower and upper (P, 2)), growing the pool where its free slots run out
-        (``batch.integrate_all``)."""
-        from mazeslam.gridslam import batch  # here, not at the top: numba loads only where the grid filter runs
+        (``kernels.integrate_all``)."""
+        from mazeslam.gridslam import kernels  # here, not at the top: numba loads only where the grid filter runs
 
         lowers, uppers = windows
         grid, pool = self.params.grid, self.pool
         free, hits = np.ascontiguousarray(rays.free, dtype=float), np.ascontiguousarray(rays.hits, dtype=float)
         start = 0
         while True:
-            start = batch.integrate_all(
+            start = kernels.integrate_all(
                 pool.tiles,
                 pool.owners,
                 pool.free,

@@ -4,8 +4,7 @@
 search modes, over a few noise-free scans of a rectangular room, and one match as a failed match's
 rescue runs it: that calls every kernel with the argument types a real run passes, so numba
 compiles each once (about 15 s) and later runs load them from the cache
-(``mazeslam.gridslam.kernels``, ``mazeslam.gridslam.batch``). Without it the first grid run on a
-machine compiles them itself.
+(``mazeslam.gridslam.kernels``). Without it the first grid run on a machine compiles them itself.
 """
 
 from __future__ import annotations
@@ -54,7 +53,7 @@ def room_log(scans: int = 6) -> tuple[CourseLog, BeamGeometry]:
 
 def rescue_match() -> None:
     """One match as a particle's rescue runs it, particle by particle (``match_pose`` on a view of a
-    window, not on the batch's gathered cells): the room's scans never make a match fail."""
+    window, not on ``match_all``'s gathered cells): the room's scans never make a match fail."""
     params = GridParams()
     window = Window(
         np.zeros((2 * params.tile_size, 2 * params.tile_size), dtype=np.float32),

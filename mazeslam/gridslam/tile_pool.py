@@ -3,7 +3,7 @@
 The grid filter's particles each own a log-odds grid (``TiledGrid``'s cells and tiles: world frame,
 cell ``(i, j)`` covers ``[i r, (i + 1) r) x [j r, (j + 1) r)``, tile ``(a, b)`` the cells ``a T .. a T + T
 - 1`` by ``b T .. b T + T - 1``). Here they are kept together, so that one compiled call can read and
-write every particle's grid (``mazeslam.gridslam.batch``):
+write every particle's grid (``mazeslam.gridslam.kernels``: ``match_all``, ``integrate_all``):
 
 - ``tiles`` (capacity, T, T) float32: the log-odds of every tile any particle holds;
 - ``table`` (P, A, B) int32: particle ``p``'s tile at key ``lower + (a, b)`` is ``tiles[table[p, a, b]]``,
@@ -111,12 +111,11 @@ class TilePool:
 
     def window(self, particle: int, lower: np.ndarray, upper: np.ndarray) -> Window:
         """``particle``'s cells of tiles ``lower`` .. ``upper`` (each (2,), upper exclusive) as one
-        dense array (a copy), as ``TiledGrid.window`` gives them."""
-        from mazeslam.gridslam import batch  # here, not at the top: numba loads only where the grid filter runs
+        dense array (a copy), as ``TiledGrid.window`` gives them (tiles beyond ``table``: unknown)."""
+        from mazeslam.gridslam import kernels  # here, not at the top: numba loads only where the grid filter runs
 
         lower, upper = np.asarray(lower, dtype=np.int64), np.asarray(upper, dtype=np.int64)
-        self.cover(lower, upper)
         size = self.params.tile_size
         values = np.empty(((upper[0] - lower[0]) * size, (upper[1] - lower[1]) * size), dtype=np.float32)
-        batch.gather(self.tiles, self.table[particle], self.lower, size, lower * size, values)
+        kernels.gather(self.tiles, self.table[particle], self.lower, size, lower * size, values)
         return Window(values, lower * self.tile_metres, self.params.resolution, lower)

@@ -45,9 +45,9 @@ FINISHED = "finished: close the window (or press q) to go on"
 
 
 class Pacing:
-    """Plays a log at ``speed`` times its own pace: how long to wait before showing a record so
-    that the log's time since the first record shown, divided by ``speed``, has passed on the
-    ``clock`` since it was shown. Waits nothing where the filter is slower than that.
+    """Plays a log at ``speed`` times its own pace: how late (or, negative, early) a record is on the
+    ``clock`` against the log's time since the first record shown divided by ``speed``; the view
+    waits out an early record and never a late one.
 
     Args:
         times: (R,) the log's record times, s.
@@ -69,10 +69,6 @@ class Pacing:
         if self._started is None:
             self._started, self._first = now, float(self.times[index])
         return now - (self._started + (self.times[index] - self._first) / self.speed)
-
-    def wait(self, index: int) -> float:
-        """Seconds to wait before showing record ``index`` (0 when it is due or late)."""
-        return max(0.0, -self.lateness(index))
 
     def hold(self, seconds: float) -> None:
         """Time spent paused does not count against the log's pace."""

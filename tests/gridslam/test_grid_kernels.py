@@ -113,13 +113,19 @@ def run_with(slam_type, building_log, params: GridSlamParams):
         return run_grid_slam(course_log, simulated.geometry, simulated.start_pose, params)
 
 
-@pytest.mark.parametrize("search", [SearchMode.FAILED_MATCH, SearchMode.EVERY_SCAN])
-def test_the_compiled_filter_runs_as_the_reference_with_the_same_seed(building_log, search):
-    """The same path, weights, resamplings and map as the filter written before the kernels."""
-    params = GridSlamParams(particles=6, seed=3, search=search)
+@pytest.mark.parametrize(
+    ("search", "min_overlap"),
+    [(SearchMode.FAILED_MATCH, 0.4), (SearchMode.EVERY_SCAN, 0.4), (SearchMode.FAILED_MATCH, 0.9)],
+)
+def test_the_compiled_filter_runs_as_the_reference_with_the_same_seed(building_log, search, min_overlap):
+    """The same path, weights, resamplings and map as the filter written before the kernels; with
+    ``min_overlap`` 0.9 many matches fail and go through the rescue, particle by particle."""
+    params = GridSlamParams(particles=6, seed=3, search=search, match=MatchParams(min_overlap=min_overlap))
     compiled = run_with(filter.GridSlam, building_log, params)
     reference = run_with(ReferenceGridSlam, building_log, params)
     assert compiled.processed.sum() > 20
+    if min_overlap > 0.5:
+        assert np.nanmin(compiled.matched) < 0.9  # some particles' matches failed
     np.testing.assert_allclose(compiled.best_poses, reference.best_poses, rtol=0, atol=1e-6)
     np.testing.assert_allclose(compiled.particles.log_weights, reference.particles.log_weights, atol=1e-6)
     np.testing.assert_array_equal(compiled.resampled, reference.resampled)

@@ -3,7 +3,7 @@ copy-on-write shared tiles, growth when free slots run out."""
 
 import numpy as np
 
-from mazeslam.gridslam import batch
+from mazeslam.gridslam import kernels
 from mazeslam.gridslam.occupancy import GridParams, TiledGrid, integrate_scan, scan_rays, tile_range
 from mazeslam.gridslam.tile_pool import TilePool
 
@@ -20,7 +20,7 @@ def scan(pool: TilePool, ranges: np.ndarray, poses: np.ndarray) -> None:
     pool.cover(lowers.min(axis=0), uppers.max(axis=0))
     start = 0
     while True:
-        start = batch.integrate_all(
+        start = kernels.integrate_all(
             pool.tiles, pool.owners, pool.free, pool.free_count, pool.table, pool.lower, PARAMS.tile_size,
             lowers, uppers, lowers * pool.tile_metres, PARAMS.resolution, rays.free, rays.hits, poses,
             PARAMS.miss, PARAMS.hit, PARAMS.clamp, start,
@@ -81,7 +81,15 @@ def test_resampled_particles_share_slots_until_one_writes_then_only_its_tiles_ar
     assert changed == [(0, 0)]
     second = pool.grid(1)  # particle 1 wrote far away: its tiles around the origin are the ancestor's
     assert all(np.array_equal(second.tiles[key], before.tiles[key]) for key in before.tiles)
-    assert pool.table[0, -pool.lower[0], -pool.lower[1]] != pool.table[1, -pool.lower[0], -pool.lower[1]]
+    origin = (-pool.lower[0], -pool.lower[1])  # the table's entry of tile (0, 0)
+    shared = (pool.table[0] >= 0) & (pool.table[1] >= 0)
+    shared[origin] = False
+    held_before = [key for key in before.tiles if key != (0, 0)]
+    assert shared.sum() == len(held_before)  # every other tile of the ancestor is still one slot
+    assert np.array_equal(pool.table[0][shared], pool.table[1][shared])
+    assert np.all(pool.owners[pool.table[0][shared]] == 2)
+    assert pool.table[0][origin] != pool.table[1][origin]  # the written tile alone was copied
+    assert pool.owners[pool.table[0][origin]] == 1 and pool.owners[pool.table[1][origin]] == 1
 
 
 def test_widening_the_table_keeps_every_tile_at_its_key():

@@ -217,17 +217,17 @@ def test_the_pause_key_holds_the_log_and_a_finished_window_stays_open_until_clos
     assert view.view.figure.get_suptitle() == live.FINISHED
 
 
-def test_pacing_waits_for_each_record_and_never_for_a_late_one():
+def test_pacing_says_how_early_or_late_each_record_is():
     from mazeslam.viz.live import Pacing
 
     clock = FakeWindow()
     pacing = Pacing(np.array([9.0, 10.0, 11.0, 13.0, 14.0]), speed=2.0, clock=clock.clock)
-    assert pacing.wait(1) == 0.0  # the first record shown sets the clock
-    assert pacing.wait(2) == 0.5  # one log second at twice its pace
+    assert pacing.lateness(1) == 0.0  # the first record shown sets the clock
+    assert pacing.lateness(2) == -0.5  # one log second at twice its pace: half a second early
     clock.now = 0.5
-    assert pacing.wait(3) == 1.0
-    clock.now = 5.0  # the filter fell behind: no waiting
-    assert pacing.wait(4) == 0.0
+    assert pacing.lateness(3) == -1.0
+    clock.now = 5.0  # the filter fell behind: due at 2 s, 3 s late
+    assert pacing.lateness(4) == 3.0
     with pytest.raises(ValueError, match="speed must be positive"):
         Pacing(np.zeros(2), speed=0.0)
 
