@@ -436,7 +436,7 @@ class GridSlam:
         else:
             one_by_one = self._match_all(proposals, points, predicted, information, windows, (low, high), mapped)
         for index in one_by_one.tolist():
-            window = self.pool.window(index, lowers[index], uppers[index]).view(low[index], high[index])
+            window = self.pool.cells(index, lowers[index], low[index], high[index])
             field = LikelihoodField(window, self.params.match, self.memo)
             if field.has_occupied:
                 seeds = starts[index] if self.search_every_scan else None

@@ -52,17 +52,12 @@ def room_log(scans: int = 6) -> tuple[CourseLog, BeamGeometry]:
 
 
 def rescue_match() -> None:
-    """One match as a particle's rescue runs it, particle by particle (``match_pose`` on a view of a
-    window, not on ``match_all``'s gathered cells): the room's scans never make a match fail."""
+    """One match as a particle's rescue runs it, particle by particle (``match_pose`` on a window's
+    cells, outside ``match_all``): the room's scans never make a match fail."""
     params = GridParams()
-    window = Window(
-        np.zeros((2 * params.tile_size, 2 * params.tile_size), dtype=np.float32),
-        np.zeros(2),
-        0.05,
-        np.zeros(2, dtype=int),
-    )
-    window.values[10:100, 40] = 1.0  # a wall
-    field = LikelihoodField(window.view(np.array([1, 1]), np.array([120, 120])), MatchParams())
+    values = np.zeros((2 * params.tile_size, 2 * params.tile_size), dtype=np.float32)
+    values[10:100, 40] = 1.0  # a wall
+    field = LikelihoodField(Window(values, np.zeros(2), 0.05, np.zeros(2, dtype=int)), MatchParams())
     points = np.column_stack([np.full(20, 0.5), np.linspace(-1.0, 1.0, 20)])
     match_pose(field, points, np.array([1.5, 2.5, 0.0]), np.eye(3), MatchParams())
 

@@ -119,3 +119,15 @@ class TilePool:
         values = np.empty(((upper[0] - lower[0]) * size, (upper[1] - lower[1]) * size), dtype=np.float32)
         kernels.gather(self.tiles, self.table[particle], self.lower, size, lower * size, values)
         return Window(values, lower * self.tile_metres, self.params.resolution, lower)
+
+    def cells(self, particle: int, lower: np.ndarray, low: np.ndarray, high: np.ndarray) -> Window:
+        """``particle``'s cells ``low`` .. ``high`` (each (2,), high exclusive) of the window whose
+        cell [0, 0] is tile ``lower``'s first (2,): what ``window(particle, lower, ...).view(low,
+        high)`` gives, without gathering the rest of the window."""
+        from mazeslam.gridslam import kernels  # here, not at the top: numba loads only where the grid filter runs
+
+        lower, low, high = (np.asarray(value, dtype=np.int64) for value in (lower, low, high))
+        size = self.params.tile_size
+        values = np.empty(tuple(high - low), dtype=np.float32)
+        kernels.gather(self.tiles, self.table[particle], self.lower, size, lower * size + low, values)
+        return Window(values, lower * self.tile_metres + low * self.params.resolution, self.params.resolution, lower)

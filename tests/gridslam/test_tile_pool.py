@@ -64,6 +64,10 @@ def test_scans_written_to_the_pool_give_the_maps_of_the_tiled_grid_at_any_capaci
             expected_window = grid.window(np.array([-4, -3]), np.array([3, 5]))
             np.testing.assert_array_equal(window.values, expected_window.values)
             np.testing.assert_array_equal(window.origin, expected_window.origin)
+            low, high = np.array([5, 11]), np.array([40, 29])  # a crop of that window, gathered alone
+            crop, expected_crop = pool.cells(particle, np.array([-4, -3]), low, high), window.view(low, high)
+            np.testing.assert_array_equal(crop.values, expected_crop.values)
+            np.testing.assert_array_equal(crop.origin, expected_crop.origin)
 
 
 def test_resampled_particles_share_slots_until_one_writes_then_only_its_tiles_are_copied():
