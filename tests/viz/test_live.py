@@ -268,3 +268,22 @@ def test_an_off_screen_view_given_a_clock_plays_the_log_at_its_pace_on_it(short_
         np.testing.assert_allclose(clock.waits, gaps[gaps > 0], atol=1e-9)
     else:
         assert min(view.lateness[1:]) > 0 and not clock.waits
+
+
+def test_an_off_screen_view_given_a_clock_draws_at_most_max_fps_frames_a_second_of_it(short_log, monkeypatch):
+    """On a clock that only the log's pace moves, a frame is drawn at the first update and then at
+    each update at least 1 / max_fps seconds of that clock after the last frame."""
+    from mazeslam.viz import live
+
+    monkeypatch.setenv("MPLBACKEND", "Agg")
+    run = load_run(short_log)
+    view = live.LiveView(run, SlamConfig().corners, "short.log", max_fps=0.5, clock=SteppedClock(0.0))
+    run_slam(run, progress=False, on_update=view)
+    shown = run.log.times[run.log.is_scan] - run.log.times[run.log.is_scan][0]  # when each update is shown
+    expected, last = 0, -np.inf
+    for time_shown in shown:
+        if time_shown - last >= 2.0:
+            expected, last = expected + 1, time_shown
+    assert 1 < expected < len(shown)  # the rate bounds it: not every update, not only the first
+    assert view.frames == expected
+    view.close(keep_open=False)
