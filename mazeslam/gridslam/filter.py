@@ -383,14 +383,14 @@ class GridSlam:
         seen = _bounds(starts, points) if len(points) >= 3 else None  # (P, 2, 2) where it is matched
         windows = tile_range(reach, self.params.window_margin, self.pool.tile_metres)  # (P, 2) each: tiles
         self.pool.cover(windows[0].min(axis=0), windows[1].max(axis=0))
-        mapped = np.asarray((self.pool.table >= 0).any(axis=(1, 2)))  # (P,) before this scan
+        mapped = self.pool.mapped()  # (P,) before this scan
         # 1. each particle's proposal against its own map
         proposals = self._proposals(points, predicted, information, starts, windows, seen, mapped)
         # 2. the draws, all at once
         self.poses = self._drawn(proposals, mapped, motion, covariance, normals)
         nis = np.where(proposals.accepted, motion_nis(self.poses, predicted, covariance), np.nan)
         # 3. each particle's scan into its own map
-        self._integrate(rays, windows)
+        self.pool.integrate(rays, self.poses, *windows)
         _check_finite(self.poses, proposals.log_etas, motion)
         weights = self.weights
         log_etas = proposals.log_etas
@@ -459,19 +459,18 @@ class GridSlam:
         ``_propose`` rescues them."""
         from mazeslam.gridslam import kernels  # here, not at the top: numba loads only where the grid filter runs
 
-        lowers, _ = windows
-        low, high = crops
-        size, match = self.params.grid.tile_size, self.params.match
+        first, end, origins = self.pool.crops(windows[0], *crops)
+        match = self.params.match
         status, modes, log_etas, means, covariances = kernels.match_all(
             self.pool.tiles,
             self.pool.table,
             self.pool.lower,
-            size,
+            self.params.grid.tile_size,
             float(self.params.grid.resolution),
             mapped,
-            lowers * size + low,
-            lowers * size + high,
-            lowers * self.pool.tile_metres + low * self.params.grid.resolution,  # as Window.view places them
+            first,
+            end,
+            origins,
             points,
             predicted,
             information,
@@ -490,41 +489,6 @@ class GridSlam:
         proposals.log_etas[accepted] = log_etas[accepted]
         proposals.means[accepted], proposals.covariances[accepted] = means[accepted], covariances[accepted]
         return np.flatnonzero(status == kernels.FAILED)
-
-    def _integrate(self, rays: ScanRays, windows: tuple[np.ndarray, np.ndarray]) -> None:
-        """Add the scan ``rays`` to every particle's map at its pose, within its window (tiles,
-        lower and upper (P, 2)), growing the pool where its free slots run out
-        (``kernels.integrate_all``)."""
-        from mazeslam.gridslam import kernels  # here, not at the top: numba loads only where the grid filter runs
-
-        lowers, uppers = windows
-        grid, pool = self.params.grid, self.pool
-        free, hits = np.ascontiguousarray(rays.free, dtype=float), np.ascontiguousarray(rays.hits, dtype=float)
-        start = 0
-        while True:
-            start = kernels.integrate_all(
-                pool.tiles,
-                pool.owners,
-                pool.free,
-                pool.free_count,
-                pool.table,
-                pool.lower,
-                grid.tile_size,
-                lowers,
-                uppers,
-                lowers * pool.tile_metres,
-                float(grid.resolution),
-                free,
-                hits,
-                self.poses,
-                grid.miss,
-                grid.hit,
-                grid.clamp,
-                start,
-            )
-            if start == len(self.poses):
-                return
-            pool.reserve(int(np.prod(uppers[start] - lowers[start])))
 
     def _drawn(
         self, proposals: Proposals, mapped: np.ndarray, motion: np.ndarray, covariance: np.ndarray, normals: np.ndarray
@@ -634,7 +598,7 @@ class GridSlam:
         there)."""
         best = self.best_particle()
         predicted = compose(self.poses[best], motion)
-        if not self.pool.has_tiles(best) or len(points) < 3:
+        if not self.pool.mapped()[best] or len(points) < 3:
             return np.zeros((0, 3))
         radius = np.hypot(*rays.reach.T).max(initial=0.0)
         disc = predicted[:2] + np.array([[-radius, -radius], [radius, radius]])

@@ -417,6 +417,14 @@ def mark(source, level, marks, rows, columns, count, origin, resolution, x0, y0,
 
 
 @njit(cache=True)
+def _updated(value, level, miss, hit, low, high):
+    """A cell's log-odds ``value`` after a scan that marked it ``level`` (1: crossed, gets ``miss``;
+    2: a beam ends in it, gets ``hit``), clamped to [``low``, ``high``] (float32 scalars, inline)."""
+    change = np.float32(hit) if level == 2 else np.float32(miss)
+    return min(max(value + change, low), high)
+
+
+@njit(cache=True)
 def integrate(values, origin, resolution, free, hits, x0, y0, cos_t, sin_t, miss, hit, clamp, tile_size):
     """Add one scan to ``values`` (X, Y) float32 in place, the robot at (x0, y0) heading with
     ``cos_t``, ``sin_t``: each cell a sample of ``free`` (F, 2) (robot frame, m) falls in gets
@@ -434,15 +442,13 @@ def integrate(values, origin, resolution, free, hits, x0, y0, cos_t, sin_t, miss
     low, high = np.float32(-clamp), np.float32(clamp)
     for k in range(count):
         i, j = rows[k], columns[k]
-        change = np.float32(hit) if marks[i, j] == 2 else np.float32(miss)
-        values[i, j] = min(max(values[i, j] + change, low), high)
+        values[i, j] = _updated(values[i, j], marks[i, j], miss, hit, low, high)
         changed[tile_row[i], tile_column[j]] = True
     return changed
 
 
-#: ``match_all``'s outcome per particle: nothing to match (no map, under 3 points or no occupied
-#: cell near them), the match accepted (the proposal is scored), or the match failed (the caller
-#: rescues it).
+#: ``match_all``'s outcome per particle: nothing to match (no map, or no occupied cell near the
+#: points), the match accepted (the proposal is scored), or the match failed (the caller rescues it).
 NOTHING, ACCEPTED, FAILED = 0, 1, 2
 
 
@@ -612,12 +618,11 @@ def integrate_all(
         offset_a, offset_b = window_lower[p, 0] - lower[0], window_lower[p, 1] - lower[1]
         for k in range(marked):
             i, j = rows[k], columns[k]
-            change = np.float32(hit) if window_marks[i, j] == 2 else np.float32(miss)
-            window_marks[i, j] = 0  # clean for the next particle
+            level, window_marks[i, j] = window_marks[i, j], 0  # clean for the next particle
             a, b = offset_a + tile_of[i], offset_b + tile_of[j]
             slot = table[p, a, b]
             if slot < 0 or owners[slot] != 1:  # once a tile: a compiled call costs more than a cell
                 slot = _writable_slot(tiles, owners, free, free_count, table, p, a, b)
             cell_a, cell_b = i - tile_of[i] * tile_size, j - tile_of[j] * tile_size
-            tiles[slot, cell_a, cell_b] = min(max(tiles[slot, cell_a, cell_b] + change, low), high)
+            tiles[slot, cell_a, cell_b] = _updated(tiles[slot, cell_a, cell_b], level, miss, hit, low, high)
     return count

@@ -20,7 +20,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from mazeslam.gridslam.occupancy import GridParams, TiledGrid, Window
+from mazeslam.gridslam.occupancy import GridParams, ScanRays, TiledGrid, Window
 
 #: Slots the pool grows by at least, as a share of its capacity: the slack it may hold unused.
 GROWTH = 0.1
@@ -94,9 +94,43 @@ class TilePool:
         free = np.flatnonzero(self.owners == 0).astype(np.int32)[::-1]
         self.free[: len(free)], self.free_count[0] = free, len(free)
 
-    def has_tiles(self, particle: int) -> bool:
-        """Whether ``particle`` holds any tile (has mapped anything)."""
-        return bool((self.table[particle] >= 0).any())
+    def mapped(self) -> np.ndarray:
+        """(P,) bool: the particle holds a tile (has mapped anything)."""
+        return np.asarray((self.table >= 0).any(axis=(1, 2)))
+
+    def integrate(self, rays: ScanRays, poses: np.ndarray, lower: np.ndarray, upper: np.ndarray) -> None:
+        """Add the scan ``rays`` to every particle's map at its pose of ``poses`` (P, 3), within its
+        window of tiles ``lower`` .. ``upper`` (P, 2 each, upper exclusive; inside ``table``: see
+        ``cover``), growing the pool where its free slots run out (``kernels.integrate_all``)."""
+        from mazeslam.gridslam import kernels  # here, not at the top: numba loads only where the grid filter runs
+
+        grid = self.params
+        free, hits = np.ascontiguousarray(rays.free, dtype=float), np.ascontiguousarray(rays.hits, dtype=float)
+        start = 0
+        while True:
+            start = kernels.integrate_all(
+                self.tiles,
+                self.owners,
+                self.free,
+                self.free_count,
+                self.table,
+                self.lower,
+                grid.tile_size,
+                lower,
+                upper,
+                lower * self.tile_metres,
+                float(grid.resolution),
+                free,
+                hits,
+                poses,
+                grid.miss,
+                grid.hit,
+                grid.clamp,
+                start,
+            )
+            if start == len(poses):
+                return
+            self.reserve(int(np.prod(upper[start] - lower[start])))
 
     def held_bytes(self) -> int:
         """Bytes of cells the particles hold together, each shared tile counted once."""
@@ -127,7 +161,14 @@ class TilePool:
         from mazeslam.gridslam import kernels  # here, not at the top: numba loads only where the grid filter runs
 
         lower, low, high = (np.asarray(value, dtype=np.int64) for value in (lower, low, high))
-        size = self.params.tile_size
+        first, _, origin = self.crops(lower, low, high)
         values = np.empty(tuple(high - low), dtype=np.float32)
-        kernels.gather(self.tiles, self.table[particle], self.lower, size, lower * size + low, values)
-        return Window(values, lower * self.tile_metres + low * self.params.resolution, self.params.resolution, lower)
+        kernels.gather(self.tiles, self.table[particle], self.lower, self.params.tile_size, first, values)
+        return Window(values, origin, self.params.resolution, lower)
+
+    def crops(self, lower: np.ndarray, low: np.ndarray, high: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The cells ``low`` .. ``high`` (..., 2 each, high exclusive) of windows whose cell [0, 0] is
+        tile ``lower``'s first (..., 2) as global cells (first, end: (..., 2) each) and the world
+        position (..., 2) of their first cell's lower corner, m (as ``Window.view`` places it)."""
+        size = self.params.tile_size
+        return lower * size + low, lower * size + high, lower * self.tile_metres + low * self.params.resolution

@@ -3,7 +3,7 @@ copy-on-write shared tiles, growth when free slots run out."""
 
 import numpy as np
 
-from mazeslam.gridslam import kernels
+from mazeslam.core.geometry import transform_points
 from mazeslam.gridslam.occupancy import GridParams, TiledGrid, integrate_scan, scan_rays, tile_range
 from mazeslam.gridslam.tile_pool import TilePool
 
@@ -15,29 +15,16 @@ def scan(pool: TilePool, ranges: np.ndarray, poses: np.ndarray) -> None:
     """Add one scan of ``ranges`` to every particle of ``pool``, each at its pose of ``poses`` (P, 3),
     within the window its reach needs (as the filter adds it)."""
     rays = scan_rays(ranges, BEARINGS, np.zeros(2), PARAMS)
-    reach = np.stack([np.vstack([pose[:2] + rays.reach @ _rotation(pose[2]).T, pose[:2]]) for pose in poses])
+    reach = np.stack([np.vstack([transform_points(pose, rays.reach), pose[:2]]) for pose in poses])
     lowers, uppers = tile_range(reach, 0.5, pool.tile_metres)
     pool.cover(lowers.min(axis=0), uppers.max(axis=0))
-    start = 0
-    while True:
-        start = kernels.integrate_all(
-            pool.tiles, pool.owners, pool.free, pool.free_count, pool.table, pool.lower, PARAMS.tile_size,
-            lowers, uppers, lowers * pool.tile_metres, PARAMS.resolution, rays.free, rays.hits, poses,
-            PARAMS.miss, PARAMS.hit, PARAMS.clamp, start,
-        )  # fmt: skip
-        if start == len(poses):
-            return
-        pool.reserve(int(np.prod(uppers[start] - lowers[start])))
-
-
-def _rotation(theta: float) -> np.ndarray:
-    return np.array([[np.cos(theta), -np.sin(theta)], [np.sin(theta), np.cos(theta)]])
+    pool.integrate(rays, poses, lowers, uppers)
 
 
 def grid_scan(grid: TiledGrid, ranges: np.ndarray, pose: np.ndarray) -> None:
     """The same scan into a ``TiledGrid`` (the filter's maps before the pool)."""
     rays = scan_rays(ranges, BEARINGS, np.zeros(2), PARAMS)
-    reach = np.vstack([pose[:2] + rays.reach @ _rotation(pose[2]).T, pose[:2]])
+    reach = np.vstack([transform_points(pose, rays.reach), pose[:2]])
     window = grid.window(*grid.tile_range(reach, 0.5))
     grid.store(window, integrate_scan(window, rays, pose, PARAMS))
 
