@@ -228,7 +228,7 @@ def candidate_pairs(
         if not len(far):
             continue
         distance = np.hypot(*(poses[far, :2] - poses[query, :2]).T)
-        reach = 3.0 * np.sqrt(chain_sigmas(cumulative, path, far, query, params)[0] ** 2)  # as chain_window's
+        reach = 3.0 * chain_sigmas(cumulative, path, far, query, params)[0]  # 3 of chain_window's sigmas
         near = distance <= params.search_radius + reach
         if not near.any():
             continue
