@@ -1,10 +1,12 @@
-"""Compile the grid filter's kernels into numba's cache before a first run needs them.
+"""Compile the grid filter's and the laser odometry's kernels into numba's cache before a first run
+needs them.
 
 ``python -m mazeslam.gridslam.precompile`` (``make install`` runs it) runs the filter, in both
-search modes, over a few noise-free scans of a rectangular room, and one match as a failed match's
-rescue runs it: that calls every kernel with the argument types a real run passes, so numba
-compiles each once (about 15 s) and later runs load them from the cache
-(``mazeslam.gridslam.kernels``). Without it the first grid run on a machine compiles them itself.
+search modes and moved by laser odometry, over a few noise-free scans of a rectangular room, and
+one match as a failed match's rescue runs it: that calls every kernel with the argument types a
+real run passes, so numba compiles each once (about 20 s) and later runs load them from the cache
+(``mazeslam.gridslam.kernels``, ``mazeslam.registration.kernels``). Without it the first run on a
+machine compiles them itself.
 """
 
 from __future__ import annotations
@@ -66,10 +68,11 @@ def main() -> None:
     began = time.perf_counter()
     course_log, geometry = room_log()
     for search in SearchMode:
-        params = GridSlamParams(particles=3, motion=MotionSource.WHEELS, search=search)
+        params = GridSlamParams(particles=3, motion=MotionSource.LASER, search=search)
         run_grid_slam(course_log, geometry, np.zeros(3), params)
     rescue_match()
-    print(f"the grid filter's kernels are compiled and cached ({time.perf_counter() - began:.1f} s)")
+    seconds = time.perf_counter() - began
+    print(f"the grid filter's and the laser odometry's kernels are compiled and cached ({seconds:.1f} s)")
 
 
 if __name__ == "__main__":

@@ -29,7 +29,7 @@ import numpy as np
 
 from mazeslam.core.beams import BeamGeometry
 from mazeslam.core.config import require
-from mazeslam.core.geometry import advance_pose, chained, transform_points, wrap_angle
+from mazeslam.core.geometry import advance_pose, chained, wrap_angle
 from mazeslam.core.motion import OdometryNoise
 from mazeslam.data.log import CourseLog
 from mazeslam.registration.correlative import CorrelativeParams, LikelihoodGrid, correlative_candidates
@@ -101,20 +101,23 @@ class ScanMatchParams:
 
 
 class ReferenceScan:
-    """A scan to match against: its points (N, 2), a KD-tree over them, the unit normal (N, 2) of
-    the surface at each point and whether that surface is straight (N,)."""
+    """A scan to match against: its points (N, 2), the unit normal (N, 2) of the surface at each
+    point, whether that surface is straight (N,), and the points sorted into buckets for the
+    nearest-neighbour queries (``mazeslam.registration.kernels.buckets``)."""
 
     def __init__(self, points: np.ndarray, params: ScanMatchParams):
-        self.points = points
-        from scipy.spatial import cKDTree  # here: scipy.spatial is slow to load, and only matching needs it
+        from mazeslam.registration import kernels  # here: numba loads only where scans are matched
 
-        self.tree = cKDTree(points)
-        k = min(params.neighbours, len(points))
-        _, nearest = self.tree.query(points, k=k)
-        spread = points[nearest] - points[nearest].mean(axis=1, keepdims=True)
-        values, vectors = np.linalg.eigh(np.einsum("nki,nkj->nij", spread, spread))
-        self.normals = vectors[:, :, 0]
-        self.straight = values[:, 0] <= params.max_flatness * np.maximum(values[:, 1], 1e-12)
+        self.points = np.ascontiguousarray(points, dtype=float)
+        self.buckets = kernels.buckets(self.points)
+        neighbours = min(params.neighbours, len(self.points))
+        normals = kernels.surface_normals(self.points, self.buckets, neighbours, params.max_flatness)
+        self.normals, self.straight = normals
+
+    @property
+    def kernel_reference(self) -> tuple:
+        """The scan as the kernels take it: ``(points, normals, straight, buckets)``."""
+        return self.points, self.normals, self.straight, self.buckets
 
 
 @dataclass(frozen=True)
@@ -147,23 +150,30 @@ def match_scan(
     params: ScanMatchParams,
     start: np.ndarray | None = None,
 ) -> Match:
-    """Gauss-Newton on the objective in the module docstring from ``start`` (default the prior).
+    """Gauss-Newton on the objective in the module docstring from ``start`` (default the prior),
+    ``iterations_per_stage`` steps at each of ``correspondence_distances``
+    (``mazeslam.registration.kernels.refine``).
 
     ``points`` (K, 2) are the current scan's returns in the robot frame; ``prior`` (3,) and
     ``prior_covariance`` (3, 3) the motion prior. The data term is scaled to 100 points, so that
     the prior weighs the same whatever the beam count.
     """
-    pose = np.array(prior if start is None else start, dtype=float)
+    from mazeslam.registration import kernels  # here: numba loads only where scans are matched
+
+    points = np.ascontiguousarray(points, dtype=float)
+    prior = np.asarray(prior, dtype=float)
     prior_information = np.linalg.inv(prior_covariance)
-    scale = _data_scale(points, params)
-    for distance in params.correspondence_distances:
-        for _ in range(params.iterations_per_stage):
-            jacobian, residual, weight = _paired_terms(reference, points, pose, distance, scale, params)
-            offset = _prior_offset(pose, prior)
-            hessian = (jacobian * weight[:, None]).T @ jacobian + prior_information
-            gradient = (jacobian * weight[:, None]).T @ residual + prior_information @ offset
-            pose = pose - np.linalg.solve(hessian, gradient)
-            pose[2] = wrap_angle(pose[2])
+    pose = kernels.refine(
+        reference.kernel_reference,
+        points,
+        prior,
+        prior_information,
+        np.array(prior if start is None else start, dtype=float),
+        np.asarray(params.correspondence_distances, dtype=float),
+        params.iterations_per_stage,
+        _data_scale(points, params),
+        params.point_noise,
+    )
     return _score(reference, points, pose, prior, prior_information, params)
 
 
@@ -177,33 +187,14 @@ def match_information(
     Pairs within the last correspondence distance on a straight surface count, with their Huber
     weight, as in the last iteration of ``match_scan``. Along a featureless corridor it is singular in
     the corridor's direction (Censi 2007's covariance of ICP, the part the data can fix)."""
+    from mazeslam.registration import kernels  # here: numba loads only where scans are matched
+
+    points = np.ascontiguousarray(points, dtype=float)
     last = params.correspondence_distances[-1]
-    jacobian, _, weight = _paired_terms(reference, points, pose, last, _data_scale(points, params), params)
-    return (jacobian * weight[:, None]).T @ jacobian
-
-
-def _paired_terms(
-    reference: ReferenceScan,
-    points: np.ndarray,
-    pose: np.ndarray,
-    distance: float,
-    scale: float,
-    params: ScanMatchParams,
-) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """The point-to-line terms of ``points`` (K, 2) (robot frame) placed at ``pose`` (3,): for each
-    point whose nearest reference point lies within ``distance`` (m) on a straight surface, the
-    Jacobian row (M, 3) of its distance along the surface normal, that distance (M,) m, and its
-    Huber weight (M,), ``scale`` (``_data_scale``) times ``min(1, point_noise / |distance|)``."""
-    moved = transform_points(pose, points)
-    gap, nearest = reference.tree.query(moved, distance_upper_bound=distance)
-    used = np.isfinite(gap)
-    used[used] = reference.straight[nearest[used]]
-    normal = reference.normals[nearest[used]]
-    residual = np.einsum("ij,ij->i", moved[used] - reference.points[nearest[used]], normal)
-    arm = moved[used] - pose[:2]
-    jacobian = np.column_stack([normal, normal[:, 1] * arm[:, 0] - normal[:, 0] * arm[:, 1]])
-    weight = scale / np.maximum(1.0, np.abs(residual) / params.point_noise)
-    return jacobian, residual, weight
+    pose = np.asarray(pose, dtype=float)
+    return kernels.information(
+        reference.kernel_reference, points, pose, last, _data_scale(points, params), params.point_noise
+    )
 
 
 def _score(
@@ -216,14 +207,11 @@ def _score(
 ) -> Match:
     """The objective with a point that has no partner within the final correspondence distance
     costing as much as one that far from its surface, and the overlap (the fraction that has one)."""
-    cap = params.correspondence_distances[-1]
-    moved = transform_points(pose, points)
-    gap, nearest = reference.tree.query(moved)
-    residual = np.einsum("ij,ij->i", moved - reference.points[nearest], reference.normals[nearest])
-    paired = gap <= cap
+    from mazeslam.registration import kernels  # here: numba loads only where scans are matched
+
+    data, overlap = kernels.score(reference.kernel_reference, points, pose, params.correspondence_distances[-1])
     offset = _prior_offset(pose, prior)
-    data = np.sum(np.where(paired, np.minimum(residual**2, cap**2), cap**2)) * _data_scale(points, params)
-    return Match(pose, float(data + offset @ prior_information @ offset), float(np.mean(paired)))
+    return Match(pose, float(data * _data_scale(points, params) + offset @ prior_information @ offset), float(overlap))
 
 
 @dataclass
