@@ -43,6 +43,16 @@ def test_the_buckets_find_the_nearest_point_as_brute_force_does(spread):
         np.testing.assert_array_equal(squared, expected_squared)
 
 
+def test_points_equally_near_come_lower_index_first():
+    """Four points 1 m from the query and a fifth beside them, in an order no bucket keeps: the
+    result is a function of the points alone (distance, then index), whatever the buckets visit first."""
+    points = np.array([[0.0, -1.0], [5.0, 5.0], [1.0, 0.0], [-1.0, 0.0], [0.0, 1.0], [0.0, 1.0]])
+    found, squared = np.full(5, -1), np.full(5, 100.0)
+    kernels.nearest(points, kernels.buckets(points), 0.0, 0.0, found, squared)
+    np.testing.assert_array_equal(found, [0, 2, 3, 4, 5])
+    np.testing.assert_array_equal(squared, [1.0, 1.0, 1.0, 1.0, 1.0])
+
+
 def test_a_point_exactly_at_the_bound_is_not_found():
     points = np.array([[0.0, 0.0], [3.0, 4.0]])
     grid = kernels.buckets(points)
