@@ -10,7 +10,7 @@ $(BIN)/mazeslam: pyproject.toml
 	$(PYTHON) -m venv $(VENV)
 	$(BIN)/pip install --quiet --upgrade pip
 	$(BIN)/pip install --quiet -e '.[dev]'
-	$(BIN)/python -m mazeslam.gridslam.precompile  # the grid filter's numba kernels, compiled once into the cache
+	$(BIN)/python -m mazeslam.gridslam.precompile  # the grid filter's and the laser odometry's numba kernels, compiled once into the cache
 	touch $(BIN)/mazeslam
 
 install: $(BIN)/mazeslam

@@ -4,7 +4,7 @@ needs them.
 ``python -m mazeslam.gridslam.precompile`` (``make install`` runs it) runs the filter, in both
 search modes and moved by laser odometry, over a few noise-free scans of a rectangular room, and
 one match as a failed match's rescue runs it: that calls every kernel with the argument types a
-real run passes, so numba compiles each once (about 20 s) and later runs load them from the cache
+real run passes, so numba compiles each once (about 15 s) and later runs load them from the cache
 (``mazeslam.gridslam.kernels``, ``mazeslam.registration.kernels``). Without it the first run on a
 machine compiles them itself.
 """
