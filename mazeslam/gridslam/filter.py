@@ -52,6 +52,7 @@ from mazeslam.gridslam.matching import (
     DistanceMemo,
     LikelihoodField,
     MatchParams,
+    field_reach,
     kernel_settings,
     match_points,
     match_pose,
@@ -482,6 +483,7 @@ class GridSlam:
             match.scale,
             match.floor,
             float(match.occupied_threshold),
+            field_reach(match, self.params.grid.resolution),
         )
         accepted = status == kernels.ACCEPTED
         proposals.accepted[:] = accepted

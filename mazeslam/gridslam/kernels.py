@@ -15,11 +15,12 @@ The kernels, in the order a scan uses them:
 1. ``any_occupied``: whether the window has an occupied cell to match against at all.
 2. ``lookup``: the distance (m) at world points, bilinear between the four nearest cell centres,
    and its gradient (the likelihood field). A cell's distance is the exact Euclidean distance from
-   its centre to the nearest occupied cell's centre, searched the first time a lookup reads it
-   (``_search``: rings of cells around it, then rings of ``BLOCK`` x ``BLOCK`` blocks that hold an
-   occupied cell, nearest first). The same values as a distance transform of the whole window
-   (``cv2.distanceTransform``, ``DIST_MASK_PRECISE``), for the few thousand cells a scan match
-   reads instead of every cell of the window.
+   its centre to the nearest occupied cell's centre, up to the field's reach, searched the first
+   time a lookup reads it (``_search``: rings of cells around it, then rings of ``BLOCK`` x
+   ``BLOCK`` blocks that hold an occupied cell, nearest first, none beyond the reach). The same
+   values as a distance transform of the whole window (``cv2.distanceTransform``,
+   ``DIST_MASK_PRECISE``) clipped at the reach, for the few thousand cells a scan match reads
+   instead of every cell of the window.
 3. ``match``: ``refine`` (iteratively reweighted Gauss-Newton of a pose on that distance plus a
    Gaussian prior, ``mazeslam.gridslam.matching.refine_pose``), then ``overlap`` (the share of
    points near a wall) at the result.
@@ -41,10 +42,11 @@ file changes, so a kernel that calls another must live in the same file (else an
 callee leaves the caller's cached copy of it stale).
 
 The distance kernels take the window and its memo as one tuple, ``field``: ``(values, threshold,
-blocks, memo, stamps, stamp, origin, resolution)``, the log-odds (X, Y) float32 and the occupied
-threshold, the blocks' occupancy (int8, -1 not known yet), the memo's distances (float32) and
-stamps (int64, each >= X * Y, ``lookup``) and this window's stamp, the origin (2,) m and the
-resolution m (``mazeslam.gridslam.matching.LikelihoodField.kernel_field``).
+blocks, memo, stamps, stamp, origin, resolution, reach)``, the log-odds (X, Y) float32 and the
+occupied threshold, the blocks' occupancy (int8, -1 not known yet), the memo's distances (float32)
+and stamps (int64, each >= X * Y, ``lookup``) and this window's stamp, the origin (2,) m, the
+resolution m and the distance (cells) at which the searches end
+(``mazeslam.gridslam.matching.LikelihoodField.kernel_field``, ``field_reach``).
 """
 
 from __future__ import annotations
@@ -170,9 +172,10 @@ def _block_search(values, threshold, blocks, i, j, best):
 
 
 @njit(cache=True)
-def _search(values, threshold, blocks, i, j):
-    """The distance (cells, float32) from cell (i, j) to the nearest occupied cell (inf if none)."""
-    best = _ring_search(values, threshold, i, j, NEAR_RINGS, math.inf)
+def _search(values, threshold, blocks, i, j, reach):
+    """The distance (cells, float32) from cell (i, j) to the nearest occupied cell, at most
+    ``reach`` (cells; the search ends there)."""
+    best = _ring_search(values, threshold, i, j, NEAR_RINGS, reach * reach)
     if best > (NEAR_RINGS + 1) * (NEAR_RINGS + 1):  # a nearer cell may lie beyond the rings searched
         best = _block_search(values, threshold, blocks, i, j, best)
     return np.float32(math.sqrt(best))
@@ -193,7 +196,7 @@ def lookup(field, world, distance, gradient):
     One function for the whole batch of points: numba passes arrays to a compiled call with a
     reference count, which costs more than a memoised read, so the per-point work stays in this loop.
     """
-    values, threshold, blocks, memo, stamps, stamp, origin, resolution = field
+    values, threshold, blocks, memo, stamps, stamp, origin, resolution, reach = field
     size_y = values.shape[1]
     scale = np.float32(resolution)
     with_gradient = gradient.shape[0] > 0
@@ -207,7 +210,7 @@ def lookup(field, world, distance, gradient):
         for corner in range(4):
             a, b = i + (corner & 1), j + (corner >> 1)
             if stamps[a * size_y + b] != stamp:
-                memo[a * size_y + b] = _search(values, threshold, blocks, a, b)
+                memo[a * size_y + b] = _search(values, threshold, blocks, a, b, reach)
                 stamps[a * size_y + b] = stamp
         d00, d10 = memo[i * size_y + j] * scale, memo[(i + 1) * size_y + j] * scale
         d01, d11 = memo[i * size_y + j + 1] * scale, memo[(i + 1) * size_y + j + 1] * scale
@@ -496,6 +499,7 @@ def match_all(
     scale,
     floor,
     threshold,
+    reach,
 ):
     """Each particle's scan match and proposal against its own map.
 
@@ -508,7 +512,8 @@ def match_all(
         predicted: (P, 3) each particle's predicted pose (the prior's mean, world frame).
         information: (3, 3) the prior's information; settings, within: ``match``'s.
         min_overlap: the share of points near a wall at which the match is accepted.
-        steps, sigma, scale, floor: ``proposal``'s; threshold: log-odds of an occupied cell.
+        steps, sigma, scale, floor: ``proposal``'s; threshold: log-odds of an occupied cell;
+        reach: the distance (cells) at which the likelihood field's searches end.
 
     Returns:
         status (P,) int8 (``NOTHING``, ``ACCEPTED``, ``FAILED``), modes (P, 3) the matches, and where
@@ -532,7 +537,7 @@ def match_all(
         if not any_occupied(values, threshold):
             continue
         blocks = np.full((-(-size_x // BLOCK), -(-size_y // BLOCK)), -1, dtype=np.int8)
-        field = (values, threshold, blocks, memo, stamps, p + 1, crop_origins[p], resolution)
+        field = (values, threshold, blocks, memo, stamps, p + 1, crop_origins[p], resolution, reach)
         modes[p], share = match(field, points, predicted[p], information, settings, within)
         if share < min_overlap:
             status[p] = FAILED

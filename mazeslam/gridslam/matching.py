@@ -1,8 +1,8 @@
 """Scan matching against an occupancy grid: a likelihood field and Gauss-Newton on it.
 
 The field is the distance ``d`` (m) from a point to the nearest occupied cell (log-odds above
-``occupied_threshold``) of a window of the map, exact between cell centres, computed where a lookup
-reads it. A scan's end points at a robot pose score
+``occupied_threshold``) of a window of the map, exact between cell centres up to ``field_reach``
+and clipped there, computed where a lookup reads it. A scan's end points at a robot pose score
 
     log p(z | m, x) = scale * sum_i log(exp(-d_i^2 / (2 sigma^2)) + floor)
 
@@ -63,6 +63,21 @@ class MatchParams:
         require(0 <= self.min_overlap <= 1, "min_overlap must be a fraction")
 
 
+#: How far the likelihood field is searched, in sigmas of the widest stage: a point 5 sigmas from
+#: every wall has likelihood exp(-12.5) ~ 4e-6, far below any ``floor``, so its score and its weight in
+#: the Gauss-Newton step (about 1e-4 of a point on a wall at a floor of 0.05) do not depend on how
+#: much farther the wall is. The field is clipped there, and the search for a cell's wall ends there.
+FIELD_REACH_SIGMAS = 5.0
+
+
+def field_reach(params: MatchParams, resolution: float) -> float:
+    """The distance (cells of ``resolution`` m) at which the likelihood field is clipped:
+    ``FIELD_REACH_SIGMAS`` times the widest sigma of the match, at least ``overlap_distance`` and
+    one cell past it (so that the overlap's test is never clipped)."""
+    widest = max(params.sigma, *params.sigma_schedule)
+    return max(FIELD_REACH_SIGMAS * widest, params.overlap_distance + resolution) / resolution
+
+
 class DistanceMemo:
     """Buffers for the cells' distances a ``LikelihoodField`` has computed, reused from field to
     field so that none is cleared: a cell's distance (float32, cells) is valid where its stamp
@@ -83,8 +98,9 @@ class LikelihoodField:
     """The distance (m) from a world point to the nearest occupied cell of ``window`` (log-odds above
     ``params.occupied_threshold``), bilinear between cell centres.
 
-    A cell's distance is the exact Euclidean distance between cell centres, what a distance
-    transform of the whole window gives (OpenCV's ``distanceTransform``, ``DIST_MASK_PRECISE``); it
+    A cell's distance is the exact Euclidean distance between cell centres up to ``field_reach``
+    (clipped there), what a distance transform of the whole window gives (OpenCV's
+    ``distanceTransform``, ``DIST_MASK_PRECISE``); it
     is computed the first time a lookup reads the cell (``mazeslam.gridslam.kernels.lookup``) and
     kept, so a scan match pays for the few thousand cells around its end points, not for every cell
     of the window. ``memo``: buffers to reuse (one per filter; a field's lookups are valid until the
@@ -100,6 +116,7 @@ class LikelihoodField:
         self.has_occupied = bool(kernels.any_occupied(self.values, self.threshold))
         self.origin = np.asarray(window.origin, dtype=float)
         self.resolution = float(window.resolution)
+        self.reach = field_reach(params, self.resolution)
         blocks_shape = -(-np.array(self.values.shape) // kernels.BLOCK)
         self.blocks = np.full(blocks_shape, -1, dtype=np.int8)  # occupied blocks, found as searches need them
         self.memo = (memo or DistanceMemo()).claim(self.values.size)
@@ -107,7 +124,7 @@ class LikelihoodField:
     @property
     def kernel_field(self) -> tuple:
         """The window and its memo as the distance kernels take them (``mazeslam.gridslam.kernels``)."""
-        return self.values, self.threshold, self.blocks, *self.memo, self.origin, self.resolution
+        return self.values, self.threshold, self.blocks, *self.memo, self.origin, self.resolution, self.reach
 
     def occupied_points(self) -> np.ndarray:
         """World positions (M, 2) of the occupied cells' centres, m."""

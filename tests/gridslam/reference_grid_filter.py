@@ -16,13 +16,14 @@ from mazeslam.core.geometry import compose, relative, transform_points, wrap_ang
 from mazeslam.core.motion import predict_relative
 from mazeslam.core.resampling import effective_sample_size
 from mazeslam.gridslam.filter import STENCIL, GridSlam, ScanUpdate, _weighted_nis, motion_nis
-from mazeslam.gridslam.matching import MatchParams, match_points
+from mazeslam.gridslam.matching import MatchParams, field_reach, match_points
 from mazeslam.gridslam.occupancy import GridParams, ScanRays, TiledGrid, Window, scan_rays
 from mazeslam.registration.correlative import LikelihoodGrid, correlative_candidates
 
 
 class ReferenceField:
-    """The distance (m) from each cell of ``window`` to its nearest occupied cell, interpolated."""
+    """The distance (m) from each cell of ``window`` to its nearest occupied cell, clipped at the
+    field's reach (``field_reach``), interpolated."""
 
     def __init__(self, window: Window, params: MatchParams):
         import cv2  # here, not at the top: the slam config names the grid's settings, and OpenCV is slow to load
@@ -30,7 +31,9 @@ class ReferenceField:
         self.occupied = window.values > params.occupied_threshold
         free = (~self.occupied).astype(np.uint8)
         self.has_occupied = bool(self.occupied.any())
-        self.distance = cv2.distanceTransform(free, cv2.DIST_L2, cv2.DIST_MASK_PRECISE) * window.resolution
+        transform = cv2.distanceTransform(free, cv2.DIST_L2, cv2.DIST_MASK_PRECISE)
+        reach = np.float32(field_reach(params, window.resolution))
+        self.distance = np.minimum(transform, reach) * window.resolution
         self.origin, self.resolution = window.origin, window.resolution
 
     def occupied_points(self) -> np.ndarray:
