@@ -14,7 +14,7 @@ from mazeslam.core.geometry import compose
 from mazeslam.data.log import read
 from mazeslam.gridslam import GridSlamParams, filter, run_grid_slam
 from mazeslam.gridslam.filter import SearchMode
-from mazeslam.gridslam.matching import LikelihoodField, MatchParams, refine_pose
+from mazeslam.gridslam.matching import LikelihoodField, MatchParams, field_reach, refine_pose
 from mazeslam.gridslam.occupancy import GridParams, Window, integrate_scan, scan_rays
 from mazeslam.sim.building import simulate_building_log
 
@@ -154,3 +154,22 @@ def test_each_particles_box_holds_its_placed_points_and_touches_them():
             ]
             placed = np.vstack(placed + ([starts[particle, :, :2]] if with_starts else []))
             np.testing.assert_allclose(box, [placed.min(axis=0), placed.max(axis=0)], rtol=0, atol=1e-12)
+
+
+@pytest.mark.parametrize("sigma_schedule", [(0.3, 0.15, 0.05), (0.04, 0.02, 0.01)])
+def test_the_field_is_the_distance_to_a_lone_wall_cell_clipped_at_its_reach(sigma_schedule):
+    """One occupied cell in a 160 x 120 window: every cell centre's distance is the hypotenuse of its
+    cell offsets, times the resolution, up to 5 sigmas of the widest stage (field_reach), and
+    exactly the reach beyond it."""
+    params = MatchParams(sigma=sigma_schedule[-1], sigma_schedule=sigma_schedule)
+    values = np.full((160, 120), -1.0, dtype=np.float32)
+    values[70, 50] = 2.0
+    window = Window(values, np.array([0.4, -2.0]), RESOLUTION, np.array([0, 0]))
+    reach = field_reach(params, RESOLUTION)
+    assert reach == pytest.approx(5 * sigma_schedule[0] / RESOLUTION)
+    i, j = np.indices((159, 119)).reshape(2, -1)  # every centre read as a lookup's corner (0, 0)
+    centres = window.origin + (np.column_stack([i, j]) + 0.5) * RESOLUTION
+    distance, _ = LikelihoodField(window, params).lookup(centres)
+    expected = np.minimum(np.hypot(i - 70, j - 50), np.float32(reach)) * RESOLUTION
+    np.testing.assert_allclose(distance, expected, rtol=1e-6, atol=1e-9)
+    assert np.any(np.hypot(i - 70, j - 50) > reach)  # the window reaches beyond the clip
