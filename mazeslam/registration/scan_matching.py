@@ -111,8 +111,9 @@ class ReferenceScan:
         self.points = np.ascontiguousarray(points, dtype=float)
         self.buckets = kernels.buckets(self.points)
         neighbours = min(params.neighbours, len(self.points))
-        normals = kernels.surface_normals(self.points, self.buckets, neighbours, params.max_flatness)
-        self.normals, self.straight = normals
+        self.normals, self.straight = kernels.surface_normals(
+            self.points, self.buckets, neighbours, params.max_flatness
+        )
 
     @property
     def kernel_reference(self) -> tuple:

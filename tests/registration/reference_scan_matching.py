@@ -1,5 +1,5 @@
 """The laser odometry's scan match as it was written before its compiled kernels: numpy and a k-d
-tree (scipy's ``cKDTree``) per Gauss-Newton iteration. The oracle that
+tree (scipy's ``cKDTree``) per Gauss-Newton iteration, and the reference scan's surface normals. The oracle that
 ``mazeslam.registration.kernels`` is tested against (tests/registration/test_icp_kernels.py):
 the same objective, the same nearest neighbours, the sums in another order."""
 
@@ -16,6 +16,15 @@ from mazeslam.registration.scan_matching import (
     _data_scale,
     _prior_offset,
 )
+
+
+def surface_normals(points: np.ndarray, neighbours: int, max_flatness: float) -> tuple[np.ndarray, np.ndarray]:
+    """``kernels.surface_normals`` in numpy: the normals (N, 2) and straightness (N,) of ``points``
+    (N, 2) by a k-d tree's ``neighbours`` nearest and numpy's eigh."""
+    _, nearest = cKDTree(points).query(points, k=neighbours)
+    spread = points[nearest] - points[nearest].mean(axis=1, keepdims=True)
+    values, vectors = np.linalg.eigh(np.einsum("nki,nkj->nij", spread, spread))
+    return vectors[:, :, 0], values[:, 0] <= max_flatness * np.maximum(values[:, 1], 1e-12)
 
 
 def match_scan(

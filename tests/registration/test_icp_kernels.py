@@ -114,21 +114,10 @@ def test_the_compiled_laser_odometry_equals_the_numpy_one_on_a_carmen_log(tmp_pa
     np.testing.assert_array_equal(compiled.overlap, expected.overlap)
 
 
-def numpy_normals(points, neighbours, max_flatness):
-    """The normals (N, 2) and straightness (N,) by a k-d tree and numpy's eigh, as ReferenceScan
-    computed them before its kernel."""
-    from scipy.spatial import cKDTree
-
-    _, nearest = cKDTree(points).query(points, k=neighbours)
-    spread = points[nearest] - points[nearest].mean(axis=1, keepdims=True)
-    values, vectors = np.linalg.eigh(np.einsum("nki,nkj->nij", spread, spread))
-    return vectors[:, :, 0], values[:, 0] <= max_flatness * np.maximum(values[:, 1], 1e-12)
-
-
 def test_the_surface_normals_are_numpys_eigenvectors_of_the_k_nearest_points():
     """Noisy room scans: the same normals up to sign, the same straight surfaces."""
     params = ScanMatchParams()
     for scan, _, _, _ in room_pairs():
-        normals, straight = numpy_normals(scan.points, params.neighbours, params.max_flatness)
+        normals, straight = reference.surface_normals(scan.points, params.neighbours, params.max_flatness)
         np.testing.assert_allclose(np.abs(np.sum(scan.normals * normals, axis=1)), 1.0, rtol=0, atol=1e-9)
         np.testing.assert_array_equal(scan.straight, straight)
