@@ -345,6 +345,7 @@ class GridSlam:
         self.resamplings = 0
         self.memo = DistanceMemo()  # the likelihood fields' buffers of the particle-by-particle matches
         self.stencil = STENCIL * np.asarray(params.kernel_step, dtype=float)  # (27, 3) steps around the match
+        self.reach = field_reach(params.match, params.grid.resolution)  # cells: where the field's searches end
 
     @property
     def weights(self) -> np.ndarray:
@@ -483,7 +484,7 @@ class GridSlam:
             match.scale,
             match.floor,
             float(match.occupied_threshold),
-            field_reach(match, self.params.grid.resolution),
+            self.reach,
         )
         accepted = status == kernels.ACCEPTED
         proposals.accepted[:] = accepted
