@@ -7,7 +7,12 @@
 * the local and closure matches accepted whose pose is more than ``WRONG`` m from the relative pose
   of the reference, and of those how many were matched from a guess (the estimate's relative pose)
   already that far off, within a window (the sequential chain's covariance) narrower than the
-  error: the estimate's mistake confirmed rather than found.
+  error: the estimate's mistake confirmed rather than found;
+* of the graph's local and closure edges that far off, how many the robust solve kept; the graph
+  solved again without them (the reference deciding which: an upper bound on what a better
+  rejection could give) and its ATE; and that solution's robust cost (every edge counted,
+  ``mazeslam.posegraph.solve.robust_cost``) over the graph's own: near 1, the graph's objective
+  cannot tell the two apart.
 
 The matches are recorded by wrapping ``mazeslam.posegraph.laser_graph``'s ``candidate_pairs`` and
 ``match_to_submap`` in the worker process; the library is unchanged.
@@ -29,9 +34,9 @@ from experiments.carmen_posegraph.run import RESULTS
 from mazeslam.core.geometry import relative
 from mazeslam.evaluation.metrics import absolute_trajectory_error, align_se2, apply_se2
 from mazeslam.posegraph import laser_graph
-from mazeslam.posegraph.graph import EdgeKind
+from mazeslam.posegraph.graph import EdgeKind, PoseGraph, edge_residuals
 from mazeslam.posegraph.params import PoseGraphParams
-from mazeslam.posegraph.solve import solve_graph
+from mazeslam.posegraph.solve import GraphSolution, robust_cost, solve_graph
 
 #: A scan this far (m) from the reference after alignment is in an error stretch.
 FAR = 0.3
@@ -100,6 +105,19 @@ def wrong_matches(entries: list[tuple], reference: np.ndarray) -> tuple[int, int
     return accepted, wrong, confirmed
 
 
+def wrong_match_edges(graph: PoseGraph, reference: np.ndarray) -> np.ndarray:
+    """(E,) bool: the local and closure edges whose measurement is more than ``WRONG`` m from the
+    relative pose of the reference poses (S, 3)."""
+    residual = edge_residuals(graph, reference)[0]
+    kinds = np.isin(graph.kind, [int(EdgeKind.LOCAL), int(EdgeKind.CLOSURE)])
+    return kinds & (np.hypot(residual[:, 0], residual[:, 1]) > WRONG)
+
+
+def cost_ratio(graph: PoseGraph, other: GraphSolution, solved: GraphSolution) -> float:
+    """The robust cost of ``graph`` (every edge) at ``other``'s poses over that at ``solved``'s."""
+    return robust_cost(graph, other.poses) / robust_cost(graph, solved.poses)
+
+
 def anatomy_row(name: str) -> dict:
     """One log's graph, rebuilt and dissected (module docstring)."""
     run = imported_run(name)
@@ -119,6 +137,8 @@ def anatomy_row(name: str) -> dict:
         solved = solve_graph(graph.select(graph.kind != kind), result.poses, solve, covariances=False)
         without[label] = absolute_trajectory_error(solved.poses, reference, align=True)["rmse"]
     accepted, wrong, confirmed = wrong_matches(log.entries, reference)
+    wrong_edges = wrong_match_edges(graph, reference)
+    without_wrong = solve_graph(graph.select(~wrong_edges), result.poses, solve, covariances=False)
     return {
         "log": name,
         "scans": len(errors),
@@ -131,6 +151,9 @@ def anatomy_row(name: str) -> dict:
         "matches_accepted": accepted,
         "matches_wrong": wrong,
         "wrong_from_wrong_guess": confirmed,
+        "wrong_kept": int((wrong_edges & result.solution.kept).sum()),
+        "ate_without_wrong_m": absolute_trajectory_error(without_wrong.poses, reference, align=True)["rmse"],
+        "cost_without_wrong_over_graph": cost_ratio(graph, without_wrong, result.solution),
     }
 
 
@@ -147,7 +170,9 @@ def main() -> None:
         f"aligned ATE against the reference poses; the scans more than {FAR} m off, their stretches (scans, the "
         "largest error) and the ATE without them; the graph solved again without its local edges and without its "
         f"closures; the local and closure matches accepted, those more than {WRONG} m from the reference's relative "
-        "pose, and of those the ones matched from a guess already that far off within a narrower window.\n\n"
+        "pose, and of those the ones matched from a guess already that far off within a narrower window; the "
+        "graph's edges that far off kept by the robust solve, the graph solved again without them (the reference "
+        "choosing them) and that solution's robust cost over the graph's own.\n\n"
     )
     (RESULTS / "error_anatomy.md").write_text(header + table.to_markdown(index=False, floatfmt=".3g") + "\n")
 

@@ -162,6 +162,13 @@ def solve_graph(
     )
 
 
+def robust_cost(graph: PoseGraph, poses: np.ndarray, params: SolveParams | None = None) -> float:
+    """The cost ``solve_graph`` minimises, at ``poses`` (S, 3), with the kernel at its final width:
+    ``sum_k rho_k(chi2_k)`` (module docstring). Two solutions of one graph compare by it."""
+    params = params or SolveParams()
+    return _cost(edge_chi2(graph, poses), graph.robust, params.kernel_chi2)
+
+
 def marginal_covariances(information: scipy.sparse.csc_array, chunk: int = 128) -> np.ndarray:
     """The diagonal 3 x 3 blocks (n, 3, 3) of the inverse of a sparse information matrix (3n, 3n).
 

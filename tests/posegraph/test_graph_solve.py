@@ -8,7 +8,7 @@ import pytest
 
 from mazeslam.core.geometry import chained, compose, relative, wrap_angle
 from mazeslam.posegraph.graph import EdgeKind, PoseGraph, edge_residuals, whitened_system
-from mazeslam.posegraph.solve import solve_graph
+from mazeslam.posegraph.solve import robust_cost, solve_graph
 
 
 def _numeric_jacobian(function, x, step=1e-6):
@@ -168,3 +168,20 @@ def test_a_single_pose_is_returned_as_given():
     solution = solve_graph(PoseGraph.empty(1), np.array([[1.0, 2.0, 0.5]]))
     np.testing.assert_array_equal(solution.poses, [[1.0, 2.0, 0.5]])
     assert solution.covariances.shape == (1, 3, 3) and solution.converged
+
+
+def test_the_robust_cost_is_chi2_on_plain_edges_and_geman_mcclure_on_robust_ones():
+    # Two poses 1 m apart along x; a sequential edge measuring 1.1 m (sigma 0.1 m: chi2 1) and a
+    # closure measuring 2 m (sigma 0.1 m: chi2 100), cost 1 + Phi 100 / (Phi + 100).
+    poses = np.array([[0.0, 0.0, 0.0], [1.0, 0.0, 0.0]])
+    covariance = np.diag([0.01, 0.01, 0.01])
+    graph = PoseGraph.of_edges(2, [0], [1], [[1.1, 0.0, 0.0]], [covariance], EdgeKind.SEQUENTIAL) + PoseGraph.of_edges(
+        2, [0], [1], [[2.0, 0.0, 0.0]], [covariance], EdgeKind.CLOSURE
+    )
+    phi = 11.34
+    assert robust_cost(graph, poses) == pytest.approx(1.0 + phi * 100.0 / (phi + 100.0))
+    # The solve lowers it: the closure's pull is bounded, the sequential edge wins.
+    solution = solve_graph(graph, poses)
+    assert robust_cost(graph, solution.poses) < robust_cost(graph, poses)
+    assert solution.poses[1, 0] == pytest.approx(1.1, abs=1e-3)
+    assert list(solution.kept) == [True, False]
