@@ -83,7 +83,7 @@ class StageClock:
     @contextmanager
     def timing(self):
         """The laser odometry and the two compiled batches timed (the filter looks them up at call
-        time), and the processed scans counted."""
+        time), the processed scans and their rays' samples counted."""
         with (
             mock.patch.object(grid_filter.GridSlam, "process", self.counted(grid_filter.GridSlam.process)),
             mock.patch.object(grid_filter, "scan_rays", self.sampled(grid_filter.scan_rays)),
@@ -110,7 +110,7 @@ def workload(name: str) -> tuple[LoadedRun, SlamConfig] | None:
         return loaded(COURSE_LOG, config), config
     from experiments.carmen_grid.run import imported_run, slam_config
 
-    if not (SHARED / "carmen" / f"{'aces' if name == 'aces' else name}-corrected.log.gz").exists():
+    if not (SHARED / "carmen" / f"{name}-corrected.log.gz").exists():
         return None
     run = imported_run(name)
     config = slam_config(run)
