@@ -120,26 +120,33 @@ def ratio_rows(name: str, run: LoadedRun, config: SlamConfig) -> Iterator[dict]:
     }
 
 
-def command_cpu(log: Path, folder: Path, environment: dict | None = None) -> float:
-    """CPU seconds of ``mazeslam slam LOG --config configs/course.toml`` in a fresh interpreter."""
+def child_cpu(arguments: list[str], environment: dict | None = None) -> float:
+    """CPU seconds of a fresh interpreter running ``arguments`` (after ``python``), with
+    ``environment`` added to this process's."""
     before = children_cpu()
     subprocess.run(
-        [sys.executable, "-m", "mazeslam.cli", "slam", str(log), "--config", str(CONFIGS / "course.toml")]
-        + ["--out", str(folder / "command")],
-        check=True,
-        capture_output=True,
-        env={**os.environ, **(environment or {})},
+        [sys.executable, *arguments], check=True, capture_output=True, env={**os.environ, **(environment or {})}
     )
     return children_cpu() - before
+
+
+def command_cpu(log: Path, folder: Path, environment: dict | None = None) -> float:
+    """CPU seconds of ``mazeslam slam LOG --config configs/course.toml`` in a fresh interpreter."""
+    command = ["-m", "mazeslam.cli", "slam", str(log), "--config", str(CONFIGS / "course.toml")]
+    return child_cpu(command + ["--out", str(folder / "command")], environment)
+
+
+def run_cpu(run: LoadedRun, config: SlamConfig) -> float:
+    """CPU seconds of ``run_slam`` over ``run`` with ``config``."""
+    began = time.process_time()
+    run_slam(run, config, progress=False)
+    return time.process_time() - began
 
 
 def filter_cpu(run: LoadedRun, particles: int) -> float:
     """CPU seconds of the grid filter's run over ``run`` (``run_slam``, configs/course.toml
     with ``particles``), numba's compiled functions already loaded."""
-    config = with_settings(load_slam_config(CONFIGS / "course.toml"), {"grid.particles": particles})
-    began = time.process_time()
-    run_slam(run, config, progress=False)
-    return time.process_time() - began
+    return run_cpu(run, with_settings(load_slam_config(CONFIGS / "course.toml"), {"grid.particles": particles}))
 
 
 def command_rows(folder: Path, log1: LoadedRun) -> Iterator[dict]:

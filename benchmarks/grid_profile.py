@@ -23,7 +23,6 @@ Logs absent from ../shared/data are skipped, saying so. Run: ``python benchmarks
 from __future__ import annotations
 
 import argparse
-import subprocess
 import sys
 import tempfile
 import time
@@ -36,13 +35,23 @@ import pandas as pd
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from bench_command import children_cpu  # noqa: E402  (CPU of finished child processes)
-from bench_grid import ACES_SCANS, CONFIGS, COURSE_LOG, SHARED, first_scans, loaded  # noqa: E402
+from bench_grid import (  # noqa: E402
+    ACES_SCANS,
+    CONFIGS,
+    COURSE_LOG,
+    SHARED,
+    child_cpu,
+    command_cpu,
+    filter_cpu,
+    first_scans,
+    loaded,
+    run_cpu,
+)
 
 from mazeslam.data.loaded_run import LoadedRun  # noqa: E402
 from mazeslam.gridslam import filter as grid_filter  # noqa: E402
 from mazeslam.gridslam import kernels  # noqa: E402
-from mazeslam.pipeline import SlamConfig, load_slam_config, run_slam  # noqa: E402
+from mazeslam.pipeline import SlamConfig, load_slam_config  # noqa: E402
 
 WORKLOADS = ("log1", "aces", "edmonton", "freiburg-079")
 
@@ -94,13 +103,6 @@ class StageClock:
             yield self
 
 
-def run_cpu(run: LoadedRun, config: SlamConfig) -> float:
-    """CPU seconds of ``run_slam`` over ``run``."""
-    began = time.process_time()
-    run_slam(run, config, progress=False)
-    return time.process_time() - began
-
-
 def workload(name: str) -> tuple[LoadedRun, SlamConfig] | None:
     """The log and configuration of workload ``name``, or None where its log is absent."""
     if name == "log1":
@@ -125,59 +127,47 @@ def stage_row(name: str, run: LoadedRun, config: SlamConfig) -> dict:
         total = run_cpu(run, config)
     with mock.patch.object(grid_filter, "STENCIL", grid_filter.STENCIL[13:14]):  # (0, 0, 0): the centre
         centre_only = run_cpu(run, config)
-    stages = clock.seconds
-    kernel_seconds = stages.get("match_all", 0.0) + stages.get("integrate_all", 0.0)
-    particle_scans = config.grid_filter.particles * clock.processed
+    motion, matching, updating = (clock.seconds.get(stage, 0.0) for stage in ("motion", "match_all", "integrate_all"))
+    particles = config.grid_filter.particles
     return {
         "workload": name if name != "aces" else f"aces (first {ACES_SCANS} scans)",
         "scans / processed": f"{int(run.log.is_scan.sum())} / {clock.processed}",
         "CPU s": total,
-        "laser odometry s": stages.get("motion", 0.0),
-        "match_all s": stages.get("match_all", 0.0),
+        "laser odometry s": motion,
+        "match_all s": matching,
         "of which the stencil s": total - centre_only,
-        "integrate_all s": stages.get("integrate_all", 0.0),
+        "integrate_all s": updating,
         "samples a scan": clock.samples / max(clock.processed, 1),
-        "integrate_all ns per sample and particle": 1e9
-        * stages.get("integrate_all", 0.0)
-        / max(clock.samples * config.grid_filter.particles, 1),
-        "rest (Python) s": total - kernel_seconds - stages.get("motion", 0.0),
+        "integrate_all ns per sample and particle": 1e9 * updating / max(clock.samples * particles, 1),
+        "rest (Python) s": total - matching - updating - motion,
         "log s": run.log.duration,
-        "filter us per particle and processed scan": 1e6 * (total - stages.get("motion", 0.0)) / particle_scans,
+        "filter us per particle and processed scan": 1e6 * (total - motion) / (particles * clock.processed),
     }
-
-
-def child_cpu(*arguments: str) -> float:
-    """CPU seconds of a fresh interpreter running ``arguments`` (after ``python``)."""
-    before = children_cpu()
-    subprocess.run([sys.executable, *arguments], check=True, capture_output=True)
-    return children_cpu() - before
 
 
 def command_rows(repeats: int = 3) -> list[dict]:
     """The log1 command's CPU by phase (module docstring, 2), each the least of ``repeats``."""
     config = load_slam_config(CONFIGS / "course.toml")
-    log1 = loaded(COURSE_LOG, config)
-    run_cpu(log1, config)
-    filter_seconds = min(run_cpu(log1, config) for _ in range(repeats))
+    log1, particles = loaded(COURSE_LOG, config), config.grid_filter.particles
+    filter_cpu(log1, particles)  # numba's compiled kernels loaded first
+    filter_seconds = min(filter_cpu(log1, particles) for _ in range(repeats))
     numba_first_call = (
         "import numpy; from mazeslam.gridslam import kernels; "
         "kernels.bounds(numpy.zeros((1, 1, 3)), numpy.zeros((1, 2)), True)"
     )
-    with tempfile.TemporaryDirectory() as folder:
-        command = ["-m", "mazeslam.cli", "slam", str(COURSE_LOG), "--config", str(CONFIGS / "course.toml")]
-        command += ["--out", folder]
-        child_cpu(*command)  # the beam convention's detection cached, as a rerun finds it
+    with tempfile.TemporaryDirectory() as scratch:
+        folder = Path(scratch)
+        command_cpu(COURSE_LOG, folder)  # the beam convention's detection cached, as a rerun finds it
         phases = {
-            name: min(child_cpu("-c", code) for _ in range(repeats))
+            name: min(child_cpu(["-c", code]) for _ in range(repeats))
             for name, code in (
-                ("interpreter", "pass"),
                 ("numpy", "import numpy"),
                 ("command line", "import mazeslam.cli.main"),
                 ("numba", numba_first_call),
                 ("matplotlib", "import numpy, matplotlib.figure, matplotlib.backends.backend_agg"),
             )
         }
-        whole = min(child_cpu(*command) for _ in range(repeats))
+        whole = min(command_cpu(COURSE_LOG, folder) for _ in range(repeats))
     parts = {
         "the interpreter and numpy": phases["numpy"],
         "the command line's imports (click, the config)": phases["command line"] - phases["numpy"],
