@@ -88,29 +88,28 @@ class MatchLog:
         return recorded
 
 
-def wrong_matches(entries: list[tuple], reference: np.ndarray) -> tuple[int, int, int]:
-    """Accepted matches, those more than ``WRONG`` m off the reference, and of those the ones whose
-    guess was as far off with a window narrower than the error."""
-    accepted = wrong = confirmed = 0
+def confirmed_matches(entries: list[tuple], reference: np.ndarray) -> int:
+    """The accepted matches more than ``WRONG`` m off the reference that were matched from a guess
+    as far off, within a window narrower than the guess's error."""
+    confirmed = 0
     for anchor, query, guess, window_sigma, match in entries:
-        if not match.accepted:
-            continue
-        accepted += 1
         truth = relative(reference[anchor], reference[query])
-        error = float(np.hypot(*(match.pose[:2] - truth[:2])))
-        if error > WRONG:
-            wrong += 1
-            guess_error = float(np.hypot(*(guess[:2] - truth[:2])))
-            confirmed += guess_error > WRONG and window_sigma < guess_error
-    return accepted, wrong, confirmed
+        guess_error = float(np.hypot(*(guess[:2] - truth[:2])))
+        wrong = np.hypot(*(match.pose[:2] - truth[:2])) > WRONG
+        confirmed += match.accepted and wrong and guess_error > WRONG and window_sigma < guess_error
+    return int(confirmed)
 
 
 def wrong_match_edges(graph: PoseGraph, reference: np.ndarray) -> np.ndarray:
-    """(E,) bool: the local and closure edges whose measurement is more than ``WRONG`` m from the
-    relative pose of the reference poses (S, 3)."""
+    """(E,) bool: the local and closure edges (the accepted matches) whose measurement is more than
+    ``WRONG`` m from the relative pose of the reference poses (S, 3)."""
     residual = edge_residuals(graph, reference)[0]
-    kinds = np.isin(graph.kind, [int(EdgeKind.LOCAL), int(EdgeKind.CLOSURE)])
-    return kinds & (np.hypot(residual[:, 0], residual[:, 1]) > WRONG)
+    return matched_edges(graph) & (np.hypot(residual[:, 0], residual[:, 1]) > WRONG)
+
+
+def matched_edges(graph: PoseGraph) -> np.ndarray:
+    """(E,) bool: the local and closure edges, one per accepted match."""
+    return np.isin(graph.kind, [int(EdgeKind.LOCAL), int(EdgeKind.CLOSURE)])
 
 
 def cost_ratio(graph: PoseGraph, other: GraphSolution, solved: GraphSolution) -> float:
@@ -136,7 +135,6 @@ def anatomy_row(name: str) -> dict:
     for label, kind in (("local", EdgeKind.LOCAL), ("closures", EdgeKind.CLOSURE)):
         solved = solve_graph(graph.select(graph.kind != kind), result.poses, solve, covariances=False)
         without[label] = absolute_trajectory_error(solved.poses, reference, align=True)["rmse"]
-    accepted, wrong, confirmed = wrong_matches(log.entries, reference)
     wrong_edges = wrong_match_edges(graph, reference)
     without_wrong = solve_graph(graph.select(~wrong_edges), result.poses, solve, covariances=False)
     return {
@@ -145,12 +143,12 @@ def anatomy_row(name: str) -> dict:
         "ate_m": float(np.sqrt(np.mean(errors**2))),
         "scans_far": int((~near).sum()),
         "ate_without_far_m": float(np.sqrt(np.mean(errors[near] ** 2))),
-        "stretches": "; ".join(_described(run) for run in stretches(errors)),
+        "stretches": "; ".join(_described(stretch) for stretch in stretches(errors)),
         "ate_without_local_m": without["local"],
         "ate_without_closures_m": without["closures"],
-        "matches_accepted": accepted,
-        "matches_wrong": wrong,
-        "wrong_from_wrong_guess": confirmed,
+        "matches_accepted": int(matched_edges(graph).sum()),
+        "matches_wrong": int(wrong_edges.sum()),
+        "wrong_from_wrong_guess": confirmed_matches(log.entries, reference),
         "wrong_kept": int((wrong_edges & result.solution.kept).sum()),
         "ate_without_wrong_m": absolute_trajectory_error(without_wrong.poses, reference, align=True)["rmse"],
         "cost_without_wrong_over_graph": cost_ratio(graph, without_wrong, result.solution),
