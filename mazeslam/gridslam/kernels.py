@@ -44,7 +44,7 @@ callee leaves the caller's cached copy of it stale).
 The distance kernels take the window and its memo as one tuple, ``field``: ``(values, threshold,
 blocks, memo, stamps, stamp, origin, resolution, reach)``, the log-odds (X, Y) float32 and the
 occupied threshold, the blocks' occupancy (int8, -1 not known yet), the memo's distances (float32)
-and stamps (int64, each >= X * Y, ``lookup``) and this window's stamp, the origin (2,) m, the
+and stamps (int32, each >= X * Y, ``lookup``) and this window's stamp, the origin (2,) m, the
 resolution m and the distance (cells) at which the searches end
 (``mazeslam.gridslam.matching.LikelihoodField.kernel_field``, ``field_reach``).
 """
@@ -308,20 +308,24 @@ def refine(field, points, prior, information, settings, start):
 
 #: The running product of the points' likelihoods is rescaled below this, so that it cannot underflow.
 _SMALL, _LOG_SMALL = 1e-200, math.log(1e-200)
+#: Side of the block of cells (corners) a point's lookups share across the poses of one heading.
+SHARED = 4
 
 
 @njit(cache=True)
-def _log_product(distance, sigma, floor):
-    """``sum_k log(exp(-d_k^2 / (2 sigma^2)) + floor)`` over ``distance`` (N,) m, as the log of the
-    product of its factors (each in [floor, 1 + floor]): one logarithm per stretch of factors
-    instead of one per point."""
-    product, total = 1.0, 0.0
-    for k in range(distance.shape[0]):
-        product *= math.exp(-0.5 * (distance[k] / sigma) ** 2) + floor
-        if product < _SMALL:
-            product /= _SMALL
-            total += _LOG_SMALL
-    return total + math.log(product)
+def _heading_group(poses, done, group):
+    """The indices of the first pose of ``poses`` (K, 3) not ``done`` (K,) bool and of every later
+    one with the same heading, into ``group`` (K,), marked done; returns how many."""
+    first = 0
+    while done[first]:
+        first += 1
+    members = 0
+    for p in range(first, poses.shape[0]):
+        if not done[p] and poses[p, 2] == poses[first, 2]:
+            group[members] = p
+            members += 1
+            done[p] = True
+    return members
 
 
 @njit(cache=True)
@@ -336,15 +340,74 @@ def objective(
     floor,
 ):
     """``log p(z | m, x) - 0.5 (x - prior)^T information (x - prior)`` (K,) at ``poses`` (K, 3) for
-    end points ``points`` (N, 2) robot frame (the heading offset wrapped)."""
-    count = points.shape[0]
-    world, distance, no_gradient = np.empty((count, 2)), np.empty(count), np.empty((0, 2))
-    scores = np.empty(poses.shape[0])
-    for p in range(poses.shape[0]):
-        place(poses[p], points, world)
-        lookup(field, world, distance, no_gradient)
+    end points ``points`` (N, 2) robot frame (the heading offset wrapped).
+
+    ``log p(z | m, x) = scale sum_k log(exp(-d_k^2 / (2 sigma^2)) + floor)``, d_k ``lookup``'s
+    distance at point k placed by the pose (``place``), with the same arithmetic. The poses are
+    taken a heading at a time, point by point: the poses of one heading place a point within a few
+    cells of each other (the proposal's stencil: within a cell), so that their lookups read one
+    block of at most ``SHARED`` x ``SHARED`` corners, searched and read once for all of them
+    (farther apart, each reads its own four). The sum is the log of a running product of the
+    factors (each in [floor, 1 + floor]), rescaled before it underflows: one logarithm a pose, not
+    one a point.
+    """
+    values, threshold, blocks, memo, stamps, stamp, origin, resolution, reach = field
+    size_x, size_y = values.shape
+    cell = np.float32(resolution)
+    count = poses.shape[0]
+    products, totals = np.ones(count), np.zeros(count)
+    done, group = np.zeros(count, dtype=np.bool_), np.empty(count, dtype=np.int64)
+    rows, columns, fractions = np.empty(count, np.int64), np.empty(count, np.int64), np.empty((count, 2))
+    corners = np.empty((SHARED, SHARED), dtype=np.float32)
+    placed = 0
+    while placed < count:
+        members = _heading_group(poses, done, group)
+        placed += members
+        cos_t, sin_t = math.cos(poses[group[0], 2]), math.sin(poses[group[0], 2])
+        for k in range(points.shape[0]):
+            # 1. The point placed by each pose of the heading: its cell and fractions, as ``lookup``'s.
+            along_x, across_x = cos_t * points[k, 0], sin_t * points[k, 1]
+            along_y, across_y = sin_t * points[k, 0], cos_t * points[k, 1]
+            low_i, low_j, high_i, high_j = size_x, size_y, -1, -1
+            for m in range(members):
+                p = group[m]
+                cell_x = (poses[p, 0] + along_x - across_x - origin[0]) / resolution - 0.5
+                cell_y = (poses[p, 1] + along_y + across_y - origin[1]) / resolution - 0.5
+                base_x, base_y = math.floor(cell_x), math.floor(cell_y)
+                fractions[m, 0], fractions[m, 1] = cell_x - base_x, cell_y - base_y
+                rows[m] = min(max(int(base_x), 0), size_x - 2)
+                columns[m] = min(max(int(base_y), 0), size_y - 2)
+                low_i, high_i = min(low_i, rows[m]), max(high_i, rows[m])
+                low_j, high_j = min(low_j, columns[m]), max(high_j, columns[m])
+            # 2. Each pose's four corners, searched where not yet known: one block read once for all
+            # of them where it fits in ``corners``, else the pose's own four.
+            shared = high_i - low_i + 2 <= SHARED and high_j - low_j + 2 <= SHARED
+            first_i = first_j = 0
+            for m in range(members):
+                i, j, fx, fy = rows[m], columns[m], fractions[m, 0], fractions[m, 1]
+                if m == 0 or not shared:
+                    first_i, last_i = (low_i, high_i + 1) if shared else (i, i + 1)
+                    first_j, last_j = (low_j, high_j + 1) if shared else (j, j + 1)
+                    for a in range(first_i, last_i + 1):
+                        for b in range(first_j, last_j + 1):
+                            if stamps[a * size_y + b] != stamp:
+                                memo[a * size_y + b] = _search(values, threshold, blocks, a, b, reach)
+                                stamps[a * size_y + b] = stamp
+                            corners[a - first_i, b - first_j] = memo[a * size_y + b]
+                # 3. Its distance, bilinear between them, into its running product.
+                a, b = i - first_i, j - first_j
+                d00, d10 = corners[a, b] * cell, corners[a + 1, b] * cell
+                d01, d11 = corners[a, b + 1] * cell, corners[a + 1, b + 1] * cell
+                distance = (d00 * (1 - fx) + d10 * fx) * (1 - fy) + (d01 * (1 - fx) + d11 * fx) * fy
+                p = group[m]
+                products[p] *= math.exp(-0.5 * (distance / sigma) ** 2) + floor
+                if products[p] < _SMALL:
+                    products[p] /= _SMALL
+                    totals[p] += _LOG_SMALL
+    scores = np.empty(count)
+    for p in range(count):
         half_norm = _prior_terms(poses[p, 0], poses[p, 1], poses[p, 2], prior, information)[3]
-        scores[p] = scale * _log_product(distance, sigma, floor) - half_norm
+        scores[p] = scale * (totals[p] + math.log(products[p])) - half_norm
     return scores
 
 
@@ -527,7 +590,7 @@ def match_all(
     for p in range(count):
         largest = max(largest, (crop_high[p, 0] - crop_low[p, 0]) * (crop_high[p, 1] - crop_low[p, 1]))
     scratch = np.empty(largest, dtype=np.float32)
-    memo, stamps = np.empty(largest, dtype=np.float32), np.zeros(largest, dtype=np.int64)
+    memo, stamps = np.empty(largest, dtype=np.float32), np.zeros(largest, dtype=np.int32)
     for p in range(count):
         if not mapped[p]:
             continue

@@ -81,15 +81,15 @@ def field_reach(params: MatchParams, resolution: float) -> float:
 class DistanceMemo:
     """Buffers for the cells' distances a ``LikelihoodField`` has computed, reused from field to
     field so that none is cleared: a cell's distance (float32, cells) is valid where its stamp
-    (int64) is the field's."""
+    (int32) is the field's."""
 
     def __init__(self):
-        self.distances, self.stamps, self.stamp = np.empty(0, dtype=np.float32), np.empty(0, dtype=np.int64), 0
+        self.distances, self.stamps, self.stamp = np.empty(0, dtype=np.float32), np.empty(0, dtype=np.int32), 0
 
     def claim(self, cells: int) -> tuple[np.ndarray, np.ndarray, int]:
         """Buffers of at least ``cells`` and a new stamp (nothing in them is valid for it yet)."""
         if len(self.distances) < cells:
-            self.distances, self.stamps = np.empty(cells, dtype=np.float32), np.zeros(cells, dtype=np.int64)
+            self.distances, self.stamps = np.empty(cells, dtype=np.float32), np.zeros(cells, dtype=np.int32)
         self.stamp += 1
         return self.distances, self.stamps, self.stamp
 

@@ -84,6 +84,24 @@ def test_refinement_scores_and_overlap_match_the_reference(seed):
         assert field.overlap(pose, points, MATCH) == reference.overlap(pose, points, MATCH)
 
 
+@pytest.mark.parametrize("seed", range(3))
+@pytest.mark.parametrize("step", [0.4 * RESOLUTION, 3.0 * RESOLUTION])
+def test_scores_of_poses_sharing_headings_match_the_reference(seed, step):
+    """The stencil's layout, 3 headings of 9 shifts each: shifts within a cell share one block of
+    corners (0.4 cells), shifts of 3 cells each read their own, and a point off the window's edge
+    clamps its corners into it (the scan reaches past the window)."""
+    window, points = walls_window(seed), scan_points(seed, count=400) * 1.8
+    field, reference = LikelihoodField(window, MATCH), ReferenceField(window, MATCH)
+    prior, information = np.array([3.1, 6.2, 0.4]), np.diag([400.0, 400.0, 2500.0])
+    stencil = np.array([(x, y, t) for x in (-1, 0, 1) for y in (-1, 0, 1) for t in (-1, 0, 1)], dtype=float)
+    poses = prior + stencil * [step, step, 0.01]
+    np.testing.assert_allclose(
+        field.objective(poses, points, prior, information, MATCH),
+        reference.objective(poses, points, prior, information, MATCH),
+        rtol=1e-12,
+    )
+
+
 @pytest.mark.parametrize("seed", range(4))
 @pytest.mark.parametrize("clear_to", [0.0, 6.0])
 def test_integration_writes_the_same_cells_and_tiles(seed, clear_to):
