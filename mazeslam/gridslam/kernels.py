@@ -16,8 +16,8 @@ The kernels, in the order a scan uses them:
 2. ``lookup``: the distance (m) at world points, bilinear between the four nearest cell centres,
    and its gradient (the likelihood field). A cell's distance is the exact Euclidean distance from
    its centre to the nearest occupied cell's centre, up to the field's reach, searched the first
-   time a lookup reads it (``_search``: rings of cells around it, then rings of ``BLOCK`` x
-   ``BLOCK`` blocks that hold an occupied cell, nearest first, none beyond the reach). The same
+   time a lookup reads it (``_search``: rings of cells around it, then the occupied cells of rings
+   of ``BLOCK`` x ``BLOCK`` blocks, nearest ring first, none beyond the reach). The same
    values as a distance transform of the whole window (``cv2.distanceTransform``,
    ``DIST_MASK_PRECISE``) clipped at the reach, for the few thousand cells a scan match reads
    instead of every cell of the window.
@@ -43,7 +43,7 @@ callee leaves the caller's cached copy of it stale).
 
 The distance kernels take the window and its memo as one tuple, ``field``: ``(values, threshold,
 blocks, memo, stamps, stamp, origin, resolution, reach)``, the log-odds (X, Y) float32 and the
-occupied threshold, the blocks' occupancy (int8, -1 not known yet), the memo's distances (float32)
+occupied threshold, the blocks' occupied cells (``empty_blocks``), the memo's distances (float32)
 and stamps (int32, each >= X * Y, ``lookup``) and this window's stamp, the origin (2,) m, the
 resolution m and the distance (cells) at which the searches end
 (``mazeslam.gridslam.matching.LikelihoodField.kernel_field``, ``field_reach``).
@@ -56,7 +56,8 @@ import math
 import numpy as np
 from numba import njit
 
-#: Side of the blocks the distance search skips when they hold no occupied cell, cells.
+#: Side of the blocks the distance search reads by their lists of occupied cells, cells (at most
+#: 181: a block's offsets are int16).
 BLOCK = 8
 #: Rings of single cells searched around a cell before the search turns to blocks.
 NEAR_RINGS = 4
@@ -96,13 +97,26 @@ def any_occupied(values: np.ndarray, threshold: float) -> bool:
 
 
 @njit(cache=True)
-def _block_state(values, threshold, low_a, high_a, low_b, high_b):
-    """1 if a cell of rows low_a..high_a, columns low_b..high_b (inclusive) is occupied, else 0."""
+def empty_blocks(size_x, size_y):
+    """The block lists of a window of (size_x, size_y) cells, none made yet: (ceil(X / BLOCK),
+    ceil(Y / BLOCK), 1 + BLOCK^2) int16, entry 0 of each block -1 (``_block_search``)."""
+    blocks = np.empty((-(-size_x // BLOCK), -(-size_y // BLOCK), 1 + BLOCK * BLOCK), dtype=np.int16)
+    blocks[:, :, 0] = -1
+    return blocks
+
+
+@njit(cache=True)
+def _list_block(values, threshold, blocks, block_a, block_b, low_a, high_a, low_b, high_b):
+    """List the occupied cells of rows low_a..high_a, columns low_b..high_b (inclusive) in
+    ``blocks[block_a, block_b]``: their count at 0, then each as its offset ``(a - low_a) BLOCK +
+    (b - low_b)``."""
+    count = 0
     for a in range(low_a, high_a + 1):
         for b in range(low_b, high_b + 1):
             if values[a, b] > threshold:
-                return 1
-    return 0
+                count += 1
+                blocks[block_a, block_b, count] = (a - low_a) * BLOCK + (b - low_b)
+    blocks[block_a, block_b, 0] = count
 
 
 @njit(cache=True)
@@ -142,8 +156,9 @@ def _block_search(values, threshold, blocks, i, j, best):
     """The least squared distance (cells) below ``best`` from cell (i, j) to an occupied cell, over
     the blocks in rings around the cell's block, nearest ring first, until a ring cannot hold a
     nearer cell (ring ``r`` >= 1 is at least ``(r - 1) BLOCK + 1`` cells away). ``blocks``
-    (ceil(X / BLOCK), ceil(Y / BLOCK)) int8 holds whether each block has an occupied cell (1) or
-    not (0), -1 until a search first needs it."""
+    (ceil(X / BLOCK), ceil(Y / BLOCK), 1 + BLOCK^2) int16 lists each block's occupied cells
+    (``_list_block``; a count of -1 until a search first needs it): a block's walls are read, not
+    its every cell."""
     size_x, size_y = values.shape
     centre_a, centre_b = i // BLOCK, j // BLOCK
     for ring in range(max(blocks.shape[0], blocks.shape[1])):
@@ -161,13 +176,12 @@ def _block_search(values, threshold, blocks, i, j, best):
                 gap_a, gap_b = max(low_a - i, 0, i - high_a), max(low_b - j, 0, j - high_b)
                 if gap_a * gap_a + gap_b * gap_b >= best:
                     continue
-                if blocks[block_a, block_b] < 0:
-                    blocks[block_a, block_b] = _block_state(values, threshold, low_a, high_a, low_b, high_b)
-                if blocks[block_a, block_b] == 0:
-                    continue
-                for a in range(low_a, high_a + 1):
-                    for b in range(low_b, high_b + 1):
-                        best = _closer(values[a, b], threshold, i, j, a, b, best)
+                if blocks[block_a, block_b, 0] < 0:
+                    _list_block(values, threshold, blocks, block_a, block_b, low_a, high_a, low_b, high_b)
+                for n in range(1, blocks[block_a, block_b, 0] + 1):
+                    a = low_a + blocks[block_a, block_b, n] // BLOCK
+                    b = low_b + blocks[block_a, block_b, n] % BLOCK
+                    best = min(best, float((a - i) ** 2 + (b - j) ** 2))
     return best
 
 
@@ -599,7 +613,7 @@ def match_all(
         gather(tiles, table[p], lower, tile_size, crop_low[p], values)
         if not any_occupied(values, threshold):
             continue
-        blocks = np.full((-(-size_x // BLOCK), -(-size_y // BLOCK)), -1, dtype=np.int8)
+        blocks = empty_blocks(size_x, size_y)
         field = (values, threshold, blocks, memo, stamps, p + 1, crop_origins[p], resolution, reach)
         modes[p], share = match(field, points, predicted[p], information, settings, within)
         if share < min_overlap:

@@ -117,8 +117,7 @@ class LikelihoodField:
         self.origin = np.asarray(window.origin, dtype=float)
         self.resolution = float(window.resolution)
         self.reach = field_reach(params, self.resolution)
-        blocks_shape = -(-np.array(self.values.shape) // kernels.BLOCK)
-        self.blocks = np.full(blocks_shape, -1, dtype=np.int8)  # occupied blocks, found as searches need them
+        self.blocks = kernels.empty_blocks(*self.values.shape)  # occupied cells by block, listed as searches need them
         self.memo = (memo or DistanceMemo()).claim(self.values.size)
 
     @property
