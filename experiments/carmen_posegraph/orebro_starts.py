@@ -15,7 +15,7 @@ import argparse
 import pandas as pd
 
 from experiments.carmen_grid.run import imported_run, slam_config
-from experiments.carmen_posegraph.run import GRID_TABLE, RESULTS
+from experiments.carmen_posegraph.run import GRID_TABLE, write_results
 from mazeslam.evaluation.metrics import absolute_trajectory_error
 from mazeslam.posegraph.laser_graph import laser_pose_graph
 from mazeslam.sweeps.pool import map_parallel
@@ -40,14 +40,12 @@ def main() -> None:
     grid = pd.read_csv(GRID_TABLE)
     start = grid[grid.log == LOG].set_index("seed")["ate_rmse_m"]
     table.insert(1, "start_path_ate_m", table.seed.map(start))
-    table.to_csv(RESULTS / "orebro_starts.csv", index=False, float_format="%.4f")
-    header = (
+    caption = (
         "orebro's pose graph started from the grid filter's best path with each filter seed: the start path's "
         "aligned ATE (experiments/carmen_grid/results/table.csv) and the graph's, against the log's reference "
-        "poses (experiments/carmen_posegraph/orebro_starts.py).\n\n"
+        "poses (experiments/carmen_posegraph/orebro_starts.py)."
     )
-    (RESULTS / "orebro_starts.md").write_text(header + table.to_markdown(index=False, floatfmt=".4g") + "\n")
-    print(table.to_string())
+    write_results(table, "orebro_starts", caption)
 
 
 if __name__ == "__main__":

@@ -37,6 +37,14 @@ RESULTS = HERE / "results"
 GRID_TABLE = HERE.parent / "carmen_grid" / "results" / "table.csv"
 
 
+def write_results(table: pd.DataFrame, name: str, caption: str) -> None:
+    """``table`` as results/<name>.csv and as results/<name>.md under ``caption`` (a paragraph), and
+    printed."""
+    table.to_csv(RESULTS / f"{name}.csv", index=False, float_format="%.4f")
+    (RESULTS / f"{name}.md").write_text(caption + "\n\n" + table.to_markdown(index=False, floatfmt=".4g") + "\n")
+    print(table.to_string())
+
+
 def run_one(name: str) -> dict:
     """Import one log, build and solve its pose graph, score it against the reference poses."""
     run = imported_run(name)

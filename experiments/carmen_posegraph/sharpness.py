@@ -21,11 +21,10 @@ import numpy as np
 import pandas as pd
 
 from experiments.carmen_grid.run import LOGS, imported_run
+from experiments.carmen_posegraph.run import RESULTS, write_results
 from mazeslam.evaluation.sharpness import occupied_cells, path_extent
 
-HERE = Path(__file__).resolve().parent
-RESULTS = HERE / "results"
-GRID_RESULTS = HERE.parent / "carmen_grid" / "results"
+GRID_RESULTS = Path(__file__).resolve().parents[1] / "carmen_grid" / "results"
 SEEDS = range(5)
 CELL, MIN_RANGE, MAX_RANGE = 0.05, 0.1, 8.0
 
@@ -70,15 +69,13 @@ def log_row(name: str) -> dict:
 
 def main() -> None:
     table = pd.DataFrame([log_row(name) for name in LOGS])
-    table.to_csv(RESULTS / "sharpness.csv", index=False, float_format="%.4f")
-    header = (
+    caption = (
         "Occupied 0.05 m cells of each CARMEN log's returns (0.1-8 m) placed by the pose graph and by the grid "
         "filter's best path (5 seeds: best, median, worst), as a ratio to the same count along the reference "
         "poses (below 1: sharper walls than the reference's); the paths' extents (bounding-box diagonal) as a "
-        "ratio to the reference's (experiments/carmen_posegraph/sharpness.py).\n\n"
+        "ratio to the reference's (experiments/carmen_posegraph/sharpness.py)."
     )
-    (RESULTS / "sharpness.md").write_text(header + table.to_markdown(index=False, floatfmt=".4g") + "\n")
-    print(table.to_string())
+    write_results(table, "sharpness", caption)
 
 
 if __name__ == "__main__":
