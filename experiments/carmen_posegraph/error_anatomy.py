@@ -114,7 +114,8 @@ def matched_edges(graph: PoseGraph) -> np.ndarray:
 
 def cost_ratio(graph: PoseGraph, other: GraphSolution, solved: GraphSolution) -> float:
     """The robust cost of ``graph`` (every edge) at ``other``'s poses over that at ``solved``'s."""
-    return robust_cost(graph, other.poses) / robust_cost(graph, solved.poses)
+    params = PoseGraphParams().solve
+    return robust_cost(graph, other.poses, params, other.drift) / robust_cost(graph, solved.poses, params, solved.drift)
 
 
 def anatomy_row(name: str) -> dict:
@@ -133,10 +134,13 @@ def anatomy_row(name: str) -> dict:
     graph, solve = result.graph, PoseGraphParams().solve
     without = {}
     for label, kind in (("local", EdgeKind.LOCAL), ("closures", EdgeKind.CLOSURE)):
-        solved = solve_graph(graph.select(graph.kind != kind), result.poses, solve, covariances=False)
+        drift = result.solution.drift
+        solved = solve_graph(graph.select(graph.kind != kind), result.poses, solve, covariances=False, drift=drift)
         without[label] = absolute_trajectory_error(solved.poses, reference, align=True)["rmse"]
     wrong_edges = wrong_match_edges(graph, reference)
-    without_wrong = solve_graph(graph.select(~wrong_edges), result.poses, solve, covariances=False)
+    without_wrong = solve_graph(
+        graph.select(~wrong_edges), result.poses, solve, covariances=False, drift=result.solution.drift
+    )
     return {
         "log": name,
         "scans": len(errors),

@@ -37,9 +37,8 @@ def laser_smooth_lines(run: LoadedRun, config: SlamConfig, out_dir: Path) -> lis
     speed = f" ({duration / max(smoothed.seconds, 1e-9):.0f}x real time)" if duration > 0 else ""
     lines = [
         (
-            f"{run.path}: pose graph of {len(result.poses)} scans, {len(kinds)} edges "
-            f"({np.sum(kinds == EdgeKind.SEQUENTIAL)} sequential, {np.sum(kinds == EdgeKind.LOCAL)} local, "
-            f"{np.sum(kinds == EdgeKind.CLOSURE)} loop closures); beam geometry: {run.geometry_origin}"
+            f"{run.path}: pose graph of {len(result.poses)} scans, {len(kinds)} edges ({_edge_counts(kinds)}); "
+            f"beam geometry: {run.geometry_origin}"
         ),
         (
             f"Matches tried: {result.tried['local']} local, {result.tried['closure']} closures; accepted as "
@@ -53,6 +52,7 @@ def laser_smooth_lines(run: LoadedRun, config: SlamConfig, out_dir: Path) -> lis
             f"({'converged' if solution.converged else 'NOT converged'}, {result.passes} passes); "
             f"{smoothed.seconds:.1f} s{speed}"
         ),
+        _drift_line(solution.drift, solution.drift_sigma),
     ]
     document = {
         "kind": "pose graph",
@@ -62,6 +62,8 @@ def laser_smooth_lines(run: LoadedRun, config: SlamConfig, out_dir: Path) -> lis
         "chi2": solution.chi2,
         "dof": solution.dof,
         "chi2_per_dof": solution.chi2_per_dof,
+        "heading_drift_rad_per_m": solution.drift,
+        "heading_drift_sigma_rad_per_m": solution.drift_sigma,
         "converged": solution.converged,
         "iterations": solution.iterations,
         "passes": result.passes,
@@ -79,6 +81,33 @@ def laser_smooth_lines(run: LoadedRun, config: SlamConfig, out_dir: Path) -> lis
         paths = _write_outputs(staging, run, smoothed, document)
     lines.append("wrote " + ", ".join(str(Path(out_dir) / path.name) for path in paths.values()))
     return lines
+
+
+#: How the smooth command names each kind of edge; blind matches and motion priors only where a log has them.
+EDGE_NAMES = {
+    EdgeKind.SEQUENTIAL: "sequential",
+    EdgeKind.BLIND: "blind sequential",
+    EdgeKind.PRIOR: "motion priors",
+    EdgeKind.LOCAL: "local",
+    EdgeKind.CLOSURE: "loop closures",
+}
+
+
+def _edge_counts(kinds: np.ndarray) -> str:
+    """The graph's edges counted by kind (``kinds`` (E,)), e.g. "439 sequential, 1432 local, 172 loop closures"."""
+    always = (EdgeKind.SEQUENTIAL, EdgeKind.LOCAL, EdgeKind.CLOSURE)
+    counts = {kind: int(np.sum(kinds == kind)) for kind in EDGE_NAMES}
+    return ", ".join(f"{count} {EDGE_NAMES[kind]}" for kind, count in counts.items() if count or kind in always)
+
+
+def _drift_line(drift: float, sigma: float) -> str:
+    """The scan matches' heading drift the solve estimated (rad/m), as a line to print."""
+    if sigma == 0:
+        return "Heading drift of the scan matches: not estimated (posegraph.solve.drift_sigma = 0)"
+    return (
+        f"Heading drift of the scan matches: {1000 * drift:+.3f} +/- {1000 * sigma:.3f} mrad per metre "
+        "(taken out of the sequential, local and closure edges)"
+    )
 
 
 def _graph_facts(smoothed: LaserSmoothed) -> dict:

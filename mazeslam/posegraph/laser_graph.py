@@ -11,6 +11,9 @@ improved estimate a few times.
    (``mazeslam.posegraph.closures.candidate_pairs``) not tried before are matched; the accepted ones
    join the graph, which is solved (``mazeslam.posegraph.solve.solve_graph``: Geman-McClure on the
    matched edges, graduated non-convexity). A pass that finds no new edge ends the loop.
+   Each solve also estimates the scan matches' heading drift (rad/m, ``mazeslam.posegraph.graph``),
+   which the loops decide and which would otherwise bend the path by the sequential and local
+   edges' shared error.
 3. The last solve's poses and covariances (relative to the first scan) are the result.
 
 Deterministic: no random draws; pairs are tried in a fixed order.
@@ -112,8 +115,8 @@ def sequential_graph(
 
     Where ``blind`` (S,) bool (no wheel odometry for the interval), the match is a robust
     ``EdgeKind.BLIND`` edge, and the match's motion prior (``priors`` (S, 3), ``prior_covariances``
-    (S, 3, 3): constant velocity, broad) a plain sequential edge beside it, so that the chain stays
-    connected where the robust solve drops the match."""
+    (S, 3, 3): constant velocity, broad) an ``EdgeKind.PRIOR`` edge beside it, trusted, so that the
+    chain stays connected where the robust solve drops the match."""
     count = len(increments)
     nodes = np.arange(1, count)
     blind = np.zeros(count, bool) if blind is None else np.asarray(blind, bool)
@@ -123,7 +126,7 @@ def sequential_graph(
         assert priors is not None and prior_covariances is not None
         where = nodes[blind[1:]]
         graph = graph + PoseGraph.of_edges(
-            count, where - 1, where, priors[where], prior_covariances[where], EdgeKind.SEQUENTIAL
+            count, where - 1, where, priors[where], prior_covariances[where], EdgeKind.PRIOR
         )
     return graph
 
@@ -237,7 +240,7 @@ def solve_laser_graph(
     tried = {"local": 0, "closure": 0}
     accepted = {"local": 0, "closure": 0}
     refused = {"overlap": 0, "ambiguous": 0, "degenerate": 0, "empty": 0}
-    solution, passes, timings = None, 0, []
+    solution, passes, timings, drift = None, 0, [], 0.0
     for _ in range(params.passes):
         passes += 1
         started = time.perf_counter()
@@ -248,11 +251,11 @@ def solve_laser_graph(
         if solution is not None and not len(found):
             break
         matched = time.perf_counter()
-        solution = solve_graph(graph, poses, params.solve, covariances=False)
-        poses = solution.poses
+        solution = solve_graph(graph, poses, params.solve, covariances=False, drift=drift)
+        poses, drift = solution.poses, solution.drift
         timings.append((matched - started, time.perf_counter() - matched, len(found)))
     started = time.perf_counter()
-    solution = solve_graph(graph, poses, params.solve, covariances=True)
+    solution = solve_graph(graph, poses, params.solve, covariances=True, drift=drift)
     timings.append((0.0, time.perf_counter() - started, 0))
     assert solution.covariances is not None
     return PoseGraphResult(

@@ -130,6 +130,11 @@ class SolveParams:
         gnc_iterations: Levenberg-Marquardt iterations at each ``mu`` above 1.
         max_iterations: iterations at ``mu`` = 1 and in the final Gaussian solve, each.
         step_tolerance: the solve stops once a step moves no pose by more than this (m or rad).
+        drift_sigma: the prior standard deviation of the scan matches' heading drift, rad/m (0: not
+            estimated, held at 0; ``mazeslam.posegraph.graph``). 0.005: the laser odometry's drift
+            against the reference poses is -0.003 to +0.0002 rad/m on the 7 CARMEN logs with
+            odometry (experiments/carmen_posegraph/results/match_noise.md), so that the prior admits
+            every drift seen and decides nothing where loops do.
     """
 
     kernel_chi2: float = 11.34
@@ -137,6 +142,7 @@ class SolveParams:
     gnc_iterations: int = 3
     max_iterations: int = 50
     step_tolerance: float = 1e-6
+    drift_sigma: float = 0.005
 
     def __post_init__(self):
         require(self.kernel_chi2 > 0, f"kernel_chi2 must be positive, got {self.kernel_chi2}")
@@ -146,6 +152,7 @@ class SolveParams:
             "gnc_iterations must be in 1..100 and max_iterations in 1..10000",
         )
         require(self.step_tolerance > 0, "step_tolerance must be positive (m, rad)")
+        require(self.drift_sigma >= 0, f"drift_sigma must be >= 0 (rad/m; 0: no drift), got {self.drift_sigma}")
 
 
 @dataclass(frozen=True)

@@ -18,10 +18,16 @@ Then each robust edge is kept when its chi2 is at most ``Phi`` (its weight at le
 graph of the kept edges is solved without a kernel, so that chi2/dof and the covariances at the
 optimum (the diagonal blocks of ``(J^T J)^-1``, the Laplace approximation) are those of a Gaussian
 problem. The first pose is held fixed (the gauge): covariances are relative to it.
+
+With ``drift_sigma`` above 0 the scan matches' heading drift (rad/m, ``mazeslam.posegraph.graph``)
+is one more unknown, under a zero-mean Gaussian prior of that standard deviation, the term
+``(drift / drift_sigma)^2`` added to the cost: the loops fix it where there are loops, the prior
+where there are none. The poses' covariances then include its uncertainty.
 """
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -41,12 +47,15 @@ class GraphSolution:
         poses: (S, 3) world frame, m and rad; pose 0 as given.
         covariances: (S, 3, 3) marginal covariance of each pose relative to pose 0 (zero for pose
             0), m^2, m rad, rad^2; None when not asked for.
-        kept: (E,) bool, the edge is in the final solve (sequential edges always; robust edges when
-            their chi2 at the robust optimum is at most ``kernel_chi2``).
+        kept: (E,) bool, the edge is in the final solve (sequential and prior edges always; robust
+            edges when their chi2 at the robust optimum is at most ``kernel_chi2``).
         edge_chi2: (E,) each edge's chi2 at the final poses.
-        chi2: the kept edges' summed chi2; dof: their residual dimensions minus the unknowns.
+        chi2: the kept edges' summed chi2; dof: their residual dimensions minus the unknowns (the
+            drift's prior counted as a residual).
         iterations: linear solves made, robust and final.
         converged: the final solve's last step moved no pose by more than ``step_tolerance``.
+        drift: the scan matches' heading drift, rad/m (0 when not estimated); drift_sigma its
+            standard deviation (0: not estimated; with no loop, about the prior's).
     """
 
     poses: np.ndarray
@@ -57,101 +66,168 @@ class GraphSolution:
     dof: int
     iterations: int
     converged: bool
+    drift: float = 0.0
+    drift_sigma: float = 0.0
 
     @property
     def chi2_per_dof(self) -> float:
         return self.chi2 / self.dof if self.dof > 0 else float("nan")
 
 
+@dataclass(frozen=True)
+class _State:
+    """What the solve moves: the poses (S, 3) and the heading drift (rad/m)."""
+
+    poses: np.ndarray
+    drift: float
+
+
 def _weights(chi2: np.ndarray, robust: np.ndarray, scale: float) -> np.ndarray:
     """IRLS weights (E,): 1 on plain edges, ``(scale / (scale + chi2))^2`` on robust ones."""
-    return np.where(robust, (scale / (scale + chi2)) ** 2, 1.0)
+    return np.where(robust, (scale / (scale + chi2)) ** 2, 1.0) if np.isfinite(scale) else np.ones(len(chi2))
 
 
 def _cost(chi2: np.ndarray, robust: np.ndarray, scale: float) -> float:
-    """The robust cost: chi2 on plain edges, ``scale chi2 / (scale + chi2)`` on robust ones."""
+    """The robust cost of the edges: chi2 on plain edges, ``scale chi2 / (scale + chi2)`` on robust ones."""
+    if not np.isfinite(scale):
+        return float(chi2.sum())
     return float(np.sum(np.where(robust, scale * chi2 / (scale + chi2), chi2)))
 
 
-def _moved(poses: np.ndarray, step: np.ndarray, fixed: int) -> np.ndarray:
-    """Poses (S, 3) moved by a step (3(S-1),) over every pose but ``fixed``, headings wrapped."""
-    moved = poses.copy()
-    free = np.arange(len(poses)) != fixed
-    moved[free] += step.reshape(-1, 3)
+def _moved(state: _State, step: np.ndarray, fixed: int, drift_sigma: float) -> _State:
+    """``state`` moved by a step (3(S-1),) over every pose but ``fixed``, headings wrapped, and, with
+    a ``drift_sigma``, one more entry for the drift."""
+    moved = state.poses.copy()
+    free = np.arange(len(moved)) != fixed
+    moved[free] += step[: 3 * (len(moved) - 1)].reshape(-1, 3)
     moved[:, 2] = wrap_angle(moved[:, 2])
-    return moved
+    return _State(moved, state.drift + (float(step[-1]) if drift_sigma > 0 else 0.0))
 
 
 def _levenberg_marquardt(
-    graph: PoseGraph, poses: np.ndarray, scale: float, iterations: int, tolerance: float, fixed: int
-) -> tuple[np.ndarray, int, bool]:
+    graph: PoseGraph, state: _State, scale: float, iterations: int, tolerance: float, drift_sigma: float
+) -> tuple[_State, int, bool]:
     """Up to ``iterations`` reweighted LM steps on the cost with kernel scale ``scale`` (inf: no
-    kernel). Returns the poses, the linear solves made and whether the last step was below
-    ``tolerance``."""
+    kernel), pose 0 held, the drift solved for under its prior when ``drift_sigma`` > 0. Returns the
+    state, the linear solves made and whether the last step was below ``tolerance``."""
     robust = graph.robust & np.isfinite(scale)
-    chi2 = edge_chi2(graph, poses)
-    cost = _cost(chi2, robust, scale) if np.isfinite(scale) else float(chi2.sum())
+    estimated = drift_sigma > 0
+    prior = 1.0 / drift_sigma**2 if estimated else 0.0
+
+    def cost(chi2: np.ndarray, drift: float) -> float:
+        return _cost(chi2, robust, scale) + prior * drift**2
+
+    chi2 = edge_chi2(graph, state.poses, state.drift)
+    current = cost(chi2, state.drift)
     damping, solves, converged = 1e-6, 0, False
     while solves < iterations and not converged:
-        weights = _weights(chi2, robust, scale) if np.isfinite(scale) else np.ones(len(graph))
-        residual, jacobian = whitened_system(graph, poses, weights, fixed)
+        residual, jacobian = whitened_system(
+            graph, state.poses, _weights(chi2, robust, scale), 0, state.drift if estimated else None
+        )
         information = (jacobian.T @ jacobian).tocsc()
         gradient = jacobian.T @ residual
+        if estimated:  # the drift's prior: the last unknown
+            gradient[-1] += prior * state.drift
         while True:
-            damped = information + damping * scipy.sparse.diags_array(information.diagonal() + 1e-12)
-            step = scipy.sparse.linalg.spsolve(damped, -gradient)
+            step = _damped_step(information, gradient, damping, prior if estimated else None)
             solves += 1
-            candidate = _moved(poses, step, fixed)
-            new_chi2 = edge_chi2(graph, candidate)
-            new_cost = _cost(new_chi2, robust, scale) if np.isfinite(scale) else float(new_chi2.sum())
+            candidate = _moved(state, step, 0, drift_sigma)
+            new_chi2 = edge_chi2(graph, candidate.poses, candidate.drift)
+            new_cost = cost(new_chi2, candidate.drift)
             converged = float(np.abs(step).max(initial=0.0)) <= tolerance
-            if new_cost <= cost:
-                poses, chi2, cost = candidate, new_chi2, new_cost
+            if new_cost <= current:
+                state, chi2, current = candidate, new_chi2, new_cost
                 damping = max(damping / 10, 1e-12)
                 break
             if converged or solves >= iterations:
                 break
             damping *= 10
-    return poses, solves, converged
+    return state, solves, converged
+
+
+def _damped_step(
+    information: scipy.sparse.csc_array, gradient: np.ndarray, damping: float, drift_prior: float | None
+) -> np.ndarray:
+    """The LM step ``-(H + damping diag(H))^-1 gradient`` for the information ``H`` (n, n) and the
+    gradient (n,). With the drift (``drift_prior``: its prior's information, 1/drift_sigma^2), the last
+    unknown is the drift, whose row and column are dense (every match edge's heading depends on
+    it): solved by the Schur complement on it (``_bordered``), so that the sparse factorisation is
+    the poses' alone and fills in no more than without the drift."""
+    if drift_prior is None:
+        damped = information + damping * scipy.sparse.diags_array(information.diagonal() + 1e-12)
+        return scipy.sparse.linalg.spsolve(damped, -gradient)
+    poses, coupling, corner = _blocks(information, drift_prior)
+    damped = poses + damping * scipy.sparse.diags_array(poses.diagonal() + 1e-12)
+    return _bordered(damped.tocsc(), coupling, corner * (1 + damping) + 1e-12 * damping, -gradient)[0]
+
+
+def _blocks(
+    information: scipy.sparse.csc_array, drift_prior: float
+) -> tuple[scipy.sparse.csc_array, np.ndarray, float]:
+    """The poses' block (n-1, n-1), the poses-drift column (n-1,) and the drift's own information
+    (its prior's added) of an information matrix (n, n) whose last unknown is the drift."""
+    last = information.shape[0] - 1
+    column = information[:, [last]].toarray().ravel()
+    return information[:last, :last].tocsc(), column[:last], float(column[last]) + drift_prior
+
+
+def _bordered(
+    poses: scipy.sparse.csc_array, coupling: np.ndarray, corner: float, right: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, float]:
+    """The solution (n,) of ``[[A, b], [b^T, c]] x = right`` for the sparse ``A`` (n-1, n-1), the
+    dense ``b`` (n-1,) and the scalar ``c``, by one factorisation of ``A``: ``A^-1 b`` and the
+    Schur complement ``s = c - b^T A^-1 b``. Also returns ``A^-1 b`` and ``s``, from which
+    ``_marginals`` makes the covariances."""
+    factors = scipy.sparse.linalg.splu(poses)
+    solved, through = factors.solve(np.column_stack([right[:-1], coupling])).T
+    schur = corner - coupling @ through
+    last = (right[-1] - coupling @ solved) / schur
+    return np.r_[solved - through * last, last], through, schur
 
 
 def solve_graph(
-    graph: PoseGraph, initial: np.ndarray, params: SolveParams | None = None, covariances: bool = True
+    graph: PoseGraph,
+    initial: np.ndarray,
+    params: SolveParams | None = None,
+    covariances: bool = True,
+    drift: float = 0.0,
 ) -> GraphSolution:
-    """The robust optimum of ``graph`` from ``initial`` poses (S, 3), pose 0 held (module docstring)."""
+    """The robust optimum of ``graph`` from ``initial`` poses (S, 3) and heading ``drift`` (rad/m),
+    pose 0 held (module docstring)."""
     params = params or SolveParams()
-    poses = np.array(initial, dtype=float)
+    sigma = params.drift_sigma
+    state = _State(np.array(initial, dtype=float), drift if sigma > 0 else 0.0)
     phi = params.kernel_chi2
     if graph.nodes < 2:  # one pose, held: nothing to solve
         zeros = np.zeros((graph.nodes, 3, 3)) if covariances else None
-        return GraphSolution(poses, zeros, np.ones(len(graph), bool), np.zeros(len(graph)), 0.0, 0, 0, True)
+        return GraphSolution(state.poses, zeros, np.ones(len(graph), bool), np.zeros(len(graph)), 0.0, 0, 0, True)
     # 1. Graduated non-convexity on the robust edges: start where every edge is quadratic.
     robust = graph.robust
-    solves = 0
-    poses, solves, _ = _levenberg_marquardt(graph, poses, np.inf, params.max_iterations, params.step_tolerance, 0)
+    state, solves, _ = _levenberg_marquardt(graph, state, np.inf, params.max_iterations, params.step_tolerance, sigma)
     if robust.any():
-        mu = max(1.0, float(edge_chi2(graph, poses)[robust].max()) / phi)
+        mu = max(1.0, float(edge_chi2(graph, state.poses, state.drift)[robust].max()) / phi)
         while True:
             last = mu <= 1.0
             count = params.max_iterations if last else params.gnc_iterations
-            poses, made, _ = _levenberg_marquardt(graph, poses, mu * phi, count, params.step_tolerance, 0)
+            state, made, _ = _levenberg_marquardt(graph, state, mu * phi, count, params.step_tolerance, sigma)
             solves += made
             if last:
                 break
             mu = max(1.0, mu / params.gnc_factor)
     # 2. Keep the robust edges that fit; solve the kept graph as a Gaussian problem.
-    kept = ~robust | (edge_chi2(graph, poses) <= phi)
+    kept = ~robust | (edge_chi2(graph, state.poses, state.drift) <= phi)
     final = graph.select(kept)
-    poses, made, converged = _levenberg_marquardt(final, poses, np.inf, params.max_iterations, params.step_tolerance, 0)
+    state, made, converged = _levenberg_marquardt(
+        final, state, np.inf, params.max_iterations, params.step_tolerance, sigma
+    )
     solves += made
-    chi2 = edge_chi2(graph, poses)
-    residual, jacobian = whitened_system(final, poses, np.ones(len(final)), 0)
-    pose_covariances = None
+    chi2 = edge_chi2(graph, state.poses, state.drift)
+    pose_covariances, drift_sigma = None, 0.0
     if covariances:
         pose_covariances = np.zeros((graph.nodes, 3, 3))
-        pose_covariances[1:] = marginal_covariances((jacobian.T @ jacobian).tocsc())
+        pose_covariances[1:], drift_sigma = _marginals(final, state, sigma)
     return GraphSolution(
-        poses=poses,
+        poses=state.poses,
         covariances=pose_covariances,
         kept=kept,
         edge_chi2=chi2,
@@ -159,14 +235,36 @@ def solve_graph(
         dof=3 * len(final) - 3 * (graph.nodes - 1),
         iterations=solves,
         converged=converged,
+        drift=state.drift,
+        drift_sigma=drift_sigma,
     )
 
 
-def robust_cost(graph: PoseGraph, poses: np.ndarray, params: SolveParams | None = None) -> float:
-    """The cost ``solve_graph`` minimises, at ``poses`` (S, 3), with the kernel at its final width:
-    ``sum_k rho_k(chi2_k)`` (module docstring). Two solutions of one graph compare by it."""
+def _marginals(graph: PoseGraph, state: _State, drift_sigma: float) -> tuple[np.ndarray, float]:
+    """The poses' marginal covariances (S-1, 3, 3) relative to pose 0 at ``state`` (the Gaussian
+    graph of the kept edges), and the drift's standard deviation (0 when ``drift_sigma`` is 0).
+
+    With the drift, the information is bordered (``_bordered``): the poses' covariance is ``A^-1 +
+    (A^-1 b)(A^-1 b)^T / s`` and the drift's variance ``1 / s``."""
+    estimated = drift_sigma > 0
+    _, jacobian = whitened_system(graph, state.poses, np.ones(len(graph)), 0, state.drift if estimated else None)
+    information = (jacobian.T @ jacobian).tocsc()
+    if not estimated:
+        return marginal_covariances(information), 0.0
+    poses, coupling, corner = _blocks(information, drift_sigma**-2)
+    _, through, schur = _bordered(poses, coupling, corner, np.zeros(len(coupling) + 1))
+    by_drift = through.reshape(-1, 3)
+    covariances = marginal_covariances(poses) + by_drift[:, :, None] * by_drift[:, None, :] / schur
+    return covariances, math.sqrt(1.0 / schur)
+
+
+def robust_cost(graph: PoseGraph, poses: np.ndarray, params: SolveParams | None = None, drift: float = 0.0) -> float:
+    """The cost ``solve_graph`` minimises, at ``poses`` (S, 3) and heading ``drift`` (rad/m), with the
+    kernel at its final width: ``sum_k rho_k(chi2_k)`` (module docstring), plus the drift's prior
+    term. Two solutions of one graph compare by it."""
     params = params or SolveParams()
-    return _cost(edge_chi2(graph, poses), graph.robust, params.kernel_chi2)
+    prior = (drift / params.drift_sigma) ** 2 if params.drift_sigma > 0 else 0.0
+    return _cost(edge_chi2(graph, poses, drift), graph.robust, params.kernel_chi2) + prior
 
 
 def marginal_covariances(information: scipy.sparse.csc_array, chunk: int = 128) -> np.ndarray:

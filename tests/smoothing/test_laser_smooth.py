@@ -11,6 +11,7 @@ from mazeslam.core.geometry import relative
 from mazeslam.data import log, sidecars
 from mazeslam.evaluation.metrics import absolute_trajectory_error
 from mazeslam.gridslam import GridSlamParams, run_grid_slam
+from mazeslam.posegraph.params import PoseGraphParams
 from mazeslam.sim.building import simulate_building_log
 
 
@@ -44,6 +45,11 @@ def test_the_graph_closes_the_loop_better_than_the_grid_filter(smoothed):
     assert document["graph"]["kept_by_solve"]["closure"] > 0
     # NEES at every scan (but the first where the solve holds it with no covariance)
     assert document["nees"]["count"] >= len(scans) - 1 and "Pose NEES at the scans" in output
+    # The simulated laser has no heading drift: the estimate is 0 within its spread, which the loops
+    # make much narrower than the prior's.
+    drift, spread = document["heading_drift_rad_per_m"], document["heading_drift_sigma_rad_per_m"]
+    assert 0 < spread < 0.5 * PoseGraphParams().solve.drift_sigma and abs(drift) < 3 * spread
+    assert "Heading drift of the scan matches" in output
 
 
 def test_the_outputs_are_a_slam_runs(smoothed):
