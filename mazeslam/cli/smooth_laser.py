@@ -52,7 +52,7 @@ def laser_smooth_lines(run: LoadedRun, config: SlamConfig, out_dir: Path) -> lis
             f"({'converged' if solution.converged else 'NOT converged'}, {result.passes} passes); "
             f"{smoothed.seconds:.1f} s{speed}"
         ),
-        _drift_line(solution.drift, solution.drift_sigma),
+        drift_line(solution.drift, solution.drift_sigma, config.posegraph.solve.drift_sigma),
     ]
     document = {
         "kind": "pose graph",
@@ -100,14 +100,19 @@ def _edge_counts(kinds: np.ndarray) -> str:
     return ", ".join(f"{count} {EDGE_NAMES[kind]}" for kind, count in counts.items() if count or kind in always)
 
 
-def _drift_line(drift: float, sigma: float) -> str:
-    """The scan matches' heading drift the solve estimated (rad/m), as a line to print."""
-    if sigma == 0:
+#: A drift whose standard deviation is above this share of its prior's was decided by the prior, not the loops.
+UNDECIDED_SHARE = 0.5
+
+
+def drift_line(drift: float, sigma: float, prior_sigma: float) -> str:
+    """The scan matches' heading drift the solve estimated (``drift`` rad/m, standard deviation
+    ``sigma``; ``prior_sigma`` the prior's, ``[posegraph.solve] drift_sigma``), as a line to print."""
+    if prior_sigma == 0:
         return "Heading drift of the scan matches: not estimated (posegraph.solve.drift_sigma = 0)"
-    return (
-        f"Heading drift of the scan matches: {1000 * drift:+.3f} +/- {1000 * sigma:.3f} mrad per metre "
-        "(taken out of the sequential, local and closure edges)"
-    )
+    line = f"Heading drift of the scan matches: {1000 * drift:+.3f} +/- {1000 * sigma:.3f} mrad per metre"
+    if sigma > UNDECIDED_SHARE * prior_sigma:
+        return line + " (no loop decides it: its prior's, 0, with the prior's spread in the covariances)"
+    return line + " (taken out of the sequential, local and closure edges)"
 
 
 def _graph_facts(smoothed: LaserSmoothed) -> dict:

@@ -98,3 +98,12 @@ def test_the_smooth_run_of_another_log_is_refused(smoothed, tmp_path):
     result = CliRunner().invoke(main, ["slam", str(other.path), "--optimum", str(out), "--out", str(tmp_path / "s")])
     assert result.exit_code != 0 and "grid SLAM" not in result.output  # refused before the filter runs
     assert f"the smooth run of {simulated.path}, not of {other.path}" in str(result.exception)
+
+
+def test_the_drift_line_says_whether_the_loops_decided_the_drift():
+    from mazeslam.cli.smooth_laser import drift_line
+
+    assert "taken out" in drift_line(-0.000245, 0.000107, 0.005)  # edmonton's: the loops decide it
+    assert "-0.245 +/- 0.107 mrad per metre" in drift_line(-0.000245, 0.000107, 0.005)
+    assert "no loop decides it" in drift_line(0.0, 0.0049, 0.005)  # a chain: the prior's spread
+    assert "not estimated" in drift_line(0.0, 0.0, 0.0)
