@@ -35,7 +35,7 @@ from mazeslam.core.geometry import relative
 from mazeslam.evaluation.metrics import absolute_trajectory_error, align_se2, apply_se2
 from mazeslam.posegraph import laser_graph
 from mazeslam.posegraph.graph import EdgeKind, PoseGraph, edge_residuals
-from mazeslam.posegraph.params import PoseGraphParams
+from mazeslam.posegraph.params import PoseGraphParams, SolveParams
 from mazeslam.posegraph.solve import GraphSolution, robust_cost, solve_graph
 
 #: A scan this far (m) from the reference after alignment is in an error stretch.
@@ -112,9 +112,8 @@ def matched_edges(graph: PoseGraph) -> np.ndarray:
     return np.isin(graph.kind, [int(EdgeKind.LOCAL), int(EdgeKind.CLOSURE)])
 
 
-def cost_ratio(graph: PoseGraph, other: GraphSolution, solved: GraphSolution) -> float:
-    """The robust cost of ``graph`` (every edge) at ``other``'s poses over that at ``solved``'s."""
-    params = PoseGraphParams().solve
+def cost_ratio(graph: PoseGraph, other: GraphSolution, solved: GraphSolution, params: SolveParams) -> float:
+    """The robust cost of ``graph`` (every edge) at ``other``'s poses and drift over that at ``solved``'s."""
     return robust_cost(graph, other.poses, params, other.drift) / robust_cost(graph, solved.poses, params, solved.drift)
 
 
@@ -131,16 +130,13 @@ def anatomy_row(name: str) -> dict:
     moved = apply_se2(align_se2(result.poses, reference), result.poses)
     errors = np.hypot(*(moved[:, :2] - reference[:, :2]).T)
     near = errors <= FAR
-    graph, solve = result.graph, PoseGraphParams().solve
+    graph, solve, drift = result.graph, PoseGraphParams().solve, result.solution.drift
     without = {}
     for label, kind in (("local", EdgeKind.LOCAL), ("closures", EdgeKind.CLOSURE)):
-        drift = result.solution.drift
         solved = solve_graph(graph.select(graph.kind != kind), result.poses, solve, covariances=False, drift=drift)
         without[label] = absolute_trajectory_error(solved.poses, reference, align=True)["rmse"]
     wrong_edges = wrong_match_edges(graph, reference)
-    without_wrong = solve_graph(
-        graph.select(~wrong_edges), result.poses, solve, covariances=False, drift=result.solution.drift
-    )
+    without_wrong = solve_graph(graph.select(~wrong_edges), result.poses, solve, covariances=False, drift=drift)
     return {
         "log": name,
         "scans": len(errors),
@@ -155,7 +151,7 @@ def anatomy_row(name: str) -> dict:
         "wrong_from_wrong_guess": confirmed_matches(log.entries, reference),
         "wrong_kept": int((wrong_edges & result.solution.kept).sum()),
         "ate_without_wrong_m": absolute_trajectory_error(without_wrong.poses, reference, align=True)["rmse"],
-        "cost_without_wrong_over_graph": cost_ratio(graph, without_wrong, result.solution),
+        "cost_without_wrong_over_graph": cost_ratio(graph, without_wrong, result.solution, solve),
     }
 
 

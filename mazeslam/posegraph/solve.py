@@ -94,14 +94,19 @@ def _cost(chi2: np.ndarray, robust: np.ndarray, scale: float) -> float:
     return float(np.sum(np.where(robust, scale * chi2 / (scale + chi2), chi2)))
 
 
-def _moved(state: _State, step: np.ndarray, fixed: int, drift_sigma: float) -> _State:
-    """``state`` moved by a step (3(S-1),) over every pose but ``fixed``, headings wrapped, and, with
-    a ``drift_sigma``, one more entry for the drift."""
+def _moved(state: _State, step: np.ndarray) -> _State:
+    """``state`` moved by a step over every pose but pose 0 (3(S-1),), headings wrapped, or over
+    them and the drift (3(S-1) + 1,)."""
     moved = state.poses.copy()
-    free = np.arange(len(moved)) != fixed
-    moved[free] += step[: 3 * (len(moved) - 1)].reshape(-1, 3)
+    unknowns = 3 * (len(moved) - 1)
+    moved[1:] += step[:unknowns].reshape(-1, 3)
     moved[:, 2] = wrap_angle(moved[:, 2])
-    return _State(moved, state.drift + (float(step[-1]) if drift_sigma > 0 else 0.0))
+    return _State(moved, state.drift + (float(step[unknowns]) if len(step) > unknowns else 0.0))
+
+
+def _drift_prior_cost(drift: float, drift_sigma: float) -> float:
+    """The drift's prior term of the cost, ``(drift / drift_sigma)^2`` (0 when it is not estimated)."""
+    return (drift / drift_sigma) ** 2 if drift_sigma > 0 else 0.0
 
 
 def _levenberg_marquardt(
@@ -115,7 +120,7 @@ def _levenberg_marquardt(
     prior = 1.0 / drift_sigma**2 if estimated else 0.0
 
     def cost(chi2: np.ndarray, drift: float) -> float:
-        return _cost(chi2, robust, scale) + prior * drift**2
+        return _cost(chi2, robust, scale) + _drift_prior_cost(drift, drift_sigma)
 
     chi2 = edge_chi2(graph, state.poses, state.drift)
     current = cost(chi2, state.drift)
@@ -131,7 +136,7 @@ def _levenberg_marquardt(
         while True:
             step = _damped_step(information, gradient, damping, prior if estimated else None)
             solves += 1
-            candidate = _moved(state, step, 0, drift_sigma)
+            candidate = _moved(state, step)
             new_chi2 = edge_chi2(graph, candidate.poses, candidate.drift)
             new_cost = cost(new_chi2, candidate.drift)
             converged = float(np.abs(step).max(initial=0.0)) <= tolerance
@@ -263,8 +268,8 @@ def robust_cost(graph: PoseGraph, poses: np.ndarray, params: SolveParams | None 
     kernel at its final width: ``sum_k rho_k(chi2_k)`` (module docstring), plus the drift's prior
     term. Two solutions of one graph compare by it."""
     params = params or SolveParams()
-    prior = (drift / params.drift_sigma) ** 2 if params.drift_sigma > 0 else 0.0
-    return _cost(edge_chi2(graph, poses, drift), graph.robust, params.kernel_chi2) + prior
+    chi2 = edge_chi2(graph, poses, drift)
+    return _cost(chi2, graph.robust, params.kernel_chi2) + _drift_prior_cost(drift, params.drift_sigma)
 
 
 def marginal_covariances(information: scipy.sparse.csc_array, chunk: int = 128) -> np.ndarray:
