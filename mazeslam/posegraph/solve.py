@@ -203,9 +203,11 @@ def solve_graph(
     sigma = params.drift_sigma
     state = _State(np.array(initial, dtype=float), drift if sigma > 0 else 0.0)
     phi = params.kernel_chi2
-    if graph.nodes < 2:  # one pose, held: nothing to solve
+    if graph.nodes < 2:  # one pose, held: nothing to solve, the drift its prior
         zeros = np.zeros((graph.nodes, 3, 3)) if covariances else None
-        return GraphSolution(state.poses, zeros, np.ones(len(graph), bool), np.zeros(len(graph)), 0.0, 0, 0, True)
+        return GraphSolution(
+            state.poses, zeros, np.ones(len(graph), bool), np.zeros(len(graph)), 0.0, 0, 0, True, state.drift, sigma
+        )
     # 1. Graduated non-convexity on the robust edges: start where every edge is quadratic.
     robust = graph.robust
     state, solves, _ = _levenberg_marquardt(graph, state, np.inf, params.max_iterations, params.step_tolerance, sigma)

@@ -218,10 +218,11 @@ def test_the_solve_is_deterministic():
     assert np.array_equal(first.covariances, second.covariances)
 
 
-def test_a_single_pose_is_returned_as_given():
-    solution = solve_graph(PoseGraph.empty(1), np.array([[1.0, 2.0, 0.5]]))
+def test_a_single_pose_is_returned_as_given_with_the_drift_its_prior():
+    solution = solve_graph(PoseGraph.empty(1), np.array([[1.0, 2.0, 0.5]]), SolveParams(drift_sigma=0.004))
     np.testing.assert_array_equal(solution.poses, [[1.0, 2.0, 0.5]])
     assert solution.covariances.shape == (1, 3, 3) and solution.converged
+    assert (solution.drift, solution.drift_sigma) == (0.0, 0.004)  # no edge decides it
 
 
 def test_the_robust_cost_is_chi2_on_plain_edges_and_geman_mcclure_on_robust_ones():
