@@ -5,9 +5,10 @@
 * the same graph solved again from its solution without its local edges, and without its closures
   (the robust solve as ``laser_pose_graph`` runs it), and the ATE of each;
 * the local and closure matches accepted whose pose is more than ``WRONG`` m from the relative pose
-  of the reference, and of those how many were matched from a guess (the estimate's relative pose)
-  already that far off, within a window (the sequential chain's covariance) narrower than the
-  error: the estimate's mistake confirmed rather than found;
+  of the reference, and of those how many were matched from guesses (the estimate's relative pose,
+  and on a log without odometry the alternatives an ambiguous step gives) all already that far off,
+  within a window (the sequential chain's covariance) narrower than the error: the estimate's
+  mistake confirmed rather than found;
 * of the graph's local and closure edges that far off, how many the robust solve kept; the graph
   solved again without them (the reference deciding which: an upper bound on what a better
   rejection could give) and its ATE; and that solution's robust cost (every edge counted,
@@ -62,8 +63,8 @@ def _described(stretch: tuple[int, int, float]) -> str:
 
 
 class MatchLog:
-    """The local and closure matches ``laser_pose_graph`` tries: (anchor, query, guess (3,), window
-    standard deviation in position (m), the match)."""
+    """The local and closure matches ``laser_pose_graph`` tries: (anchor, query, guesses (G, 3),
+    window standard deviation in position (m), the match)."""
 
     def __init__(self):
         self.entries: list[tuple] = []
@@ -82,19 +83,19 @@ class MatchLog:
         def recorded(submap, points, guess, window, *args, **kwargs):
             match = original(submap, points, guess, window, *args, **kwargs)
             if self.pair is not None:  # not the blind intervals' ambiguity test
-                self.entries.append((*self.pair, np.array(guess), float(np.sqrt(window[0, 0])), match))
+                self.entries.append((*self.pair, np.atleast_2d(guess), float(np.sqrt(window[0, 0])), match))
             return match
 
         return recorded
 
 
 def confirmed_matches(entries: list[tuple], reference: np.ndarray) -> int:
-    """The accepted matches more than ``WRONG`` m off the reference that were matched from a guess
-    as far off, within a window narrower than the guess's error."""
+    """The accepted matches more than ``WRONG`` m off the reference that were matched from guesses
+    all as far off, within a window narrower than the nearest guess's error."""
     confirmed = 0
-    for anchor, query, guess, window_sigma, match in entries:
+    for anchor, query, guesses, window_sigma, match in entries:
         truth = relative(reference[anchor], reference[query])
-        guess_error = float(np.hypot(*(guess[:2] - truth[:2])))
+        guess_error = float(np.hypot(*(guesses[:, :2] - truth[:2]).T).min())
         wrong = np.hypot(*(match.pose[:2] - truth[:2])) > WRONG
         confirmed += match.accepted and wrong and guess_error > WRONG and window_sigma < guess_error
     return int(confirmed)

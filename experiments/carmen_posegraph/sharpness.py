@@ -16,13 +16,14 @@ visits of the place), placed by the graph and by the reference. A ratio well bel
 whole says the reference's walls there are the blurred ones; near 1, the measure cannot tell (in a
 corridor two placements metres apart can draw the same walls).
 
-Run: ``python -m experiments.carmen_posegraph.sharpness`` (after run.py and experiments/carmen_grid's
-run.py); writes results/sharpness.csv and .md, and results/stretch_sharpness.csv and .md. About 30
-CPU s.
+Run: ``python -m experiments.carmen_posegraph.sharpness [--logs orebro ...]`` (after run.py and
+experiments/carmen_grid's run.py of those logs); writes results/sharpness.csv and .md, and
+results/stretch_sharpness.csv and .md (the rows of the logs not run kept). About 30 CPU s.
 """
 
 from __future__ import annotations
 
+import argparse
 import dataclasses
 from pathlib import Path
 
@@ -118,8 +119,22 @@ def stretch_rows(name: str) -> list[dict]:
     return rows
 
 
+def with_other_logs(table: pd.DataFrame, name: str) -> pd.DataFrame:
+    """``table``'s rows and those of results/<name>.csv for the logs ``table`` does not hold (a run
+    of some logs keeps the others'), in ``LOGS`` order."""
+    path = RESULTS / f"{name}.csv"
+    if path.exists():
+        old = pd.read_csv(path, dtype={"scans": str})
+        table = pd.concat([old[~old.log.isin(table.log)], table])
+    order = {log: index for index, log in enumerate(LOGS)}
+    return table.sort_values("log", key=lambda logs: logs.map(order), kind="stable").reset_index(drop=True)
+
+
 def main() -> None:
-    table = pd.DataFrame([log_row(name) for name in LOGS])
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--logs", nargs="+", default=LOGS, choices=LOGS)
+    logs = parser.parse_args().logs
+    table = with_other_logs(pd.DataFrame([log_row(name) for name in logs]), "sharpness")
     caption = (
         "Occupied 0.05 m cells of each CARMEN log's returns (0.1-8 m) placed by the pose graph and by the grid "
         "filter's best path (5 seeds: best, median, worst), as a ratio to the same count along the reference "
@@ -127,7 +142,7 @@ def main() -> None:
         "ratio to the reference's (experiments/carmen_posegraph/sharpness.py)."
     )
     write_results(table, "sharpness", caption)
-    local = pd.DataFrame([row for name in LOGS for row in stretch_rows(name)])
+    local = with_other_logs(pd.DataFrame([row for name in logs for row in stretch_rows(name)]), "stretch_sharpness")
     caption = (
         f"Where the pose graph is more than 0.3 m from the reference (aligned): the occupied 0.05 m cells of the "
         f"returns (0.1-8 m) of every scan within {NEAR:g} m of the stretch by the reference, placed by the graph and "

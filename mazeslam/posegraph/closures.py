@@ -19,7 +19,8 @@ The submap of an anchor keyframe is the returns of the keyframes within ``submap
 it along the path (and beyond the query's neighbouring keyframe on the anchor's side: before it for
 an anchor behind the query, after it for one ahead), placed by the estimate in the anchor's robot
 frame and thinned to one point per ``voxel``. The search window around the estimate's relative pose
-has the standard deviation the sequential chain between the two scans states (its summed
+(and around each alternative the caller passes: ``match_to_submap`` takes several guesses and
+compares their modes together) has the standard deviation the sequential chain between the two scans states (its summed
 covariances, the heading's spread swinging the path, ``chain_window``), at least ``min_window`` and
 at most ``max_window``.
 
@@ -52,8 +53,9 @@ from mazeslam.registration.scan_matching import ReferenceScan, ScanMatchParams, 
 @dataclass(frozen=True)
 class SubmapMatch:
     """A scan matched to a submap: the pose (3,) of the scan in the anchor's robot frame, its
-    covariance (3, 3), the overlap, the best and second-best modes' objectives (inf: no second), and
-    whether it is accepted and why not (``refusal``: "" when accepted)."""
+    covariance (3, 3), the overlap, the best and second-best modes' objectives (inf: no second),
+    whether it is accepted and why not (``refusal``: "" when accepted), and every distinct mode's
+    pose (M, 3), best first."""
 
     pose: np.ndarray
     covariance: np.ndarray
@@ -61,6 +63,7 @@ class SubmapMatch:
     best: float
     second: float
     refusal: str
+    modes: np.ndarray
 
     @property
     def accepted(self) -> bool:
@@ -156,10 +159,14 @@ def match_to_submap(
 ) -> SubmapMatch:
     """Match ``points`` (K, 2) (robot frame) to ``submap`` around ``guess`` (3,) (the scan's pose in
     the anchor's frame by the estimate) within ``window`` (3, 3), the search's covariance; the
-    ambiguity test of the module docstring."""
+    ambiguity test of the module docstring. ``guess`` may also be (G, 3): the same window searched
+    around each guess (the estimate's and its alternatives where a step between the two scans is
+    ambiguous, ``mazeslam.posegraph.laser_graph``), the modes of every search compared together."""
     search = search_params(window, params)
-    seeds = correlative_candidates(submap.grid(search), points, guess, window, search)
-    refined = [match_scan(submap.reference, points, guess, window, scan_params, start=seed) for seed in seeds]
+    refined = []
+    for centre in np.atleast_2d(guess):
+        seeds = correlative_candidates(submap.grid(search), points, centre, window, search)
+        refined += [match_scan(submap.reference, points, centre, window, scan_params, start=seed) for seed in seeds]
     refined.sort(key=lambda match: match.objective)
     modes: list = []
     for match in refined:
@@ -180,7 +187,8 @@ def match_to_submap(
         refusal = "ambiguous"
     elif math.sqrt(np.linalg.eigvalsh(covariance[:2, :2])[-1]) > params.max_sigma:
         refusal = "degenerate"
-    return SubmapMatch(best.pose, covariance, best.overlap, best.objective, second, refusal)
+    poses = np.array([mode.pose for mode in modes])
+    return SubmapMatch(best.pose, covariance, best.overlap, best.objective, second, refusal, poses)
 
 
 def chain_window(

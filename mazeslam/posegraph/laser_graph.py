@@ -6,7 +6,11 @@ improved estimate a few times.
    (``mazeslam.posegraph.sequential``). Their chain from the log's start pose is the first estimate;
    on a log without any wheel odometry (``PoseGraphParams.grid_start``) the grid filter's best path
    (``mazeslam.gridslam``, the config's ``[grid]``) is. A blind match (no wheel odometry) that the
-   ambiguity test finds ambiguous is left out (``ambiguous_intervals``).
+   ambiguity test finds ambiguous is left out (``ambiguous_intervals``) and its modes kept: a
+   match between two scans that such a step separates is searched around the estimate's relative
+   pose and around the one each mode of the step gives (``guesses``), so that the ambiguity test
+   refuses it where the submap cannot tell the modes apart instead of confirming whichever the
+   estimate took.
 2. Each pass: the keyframes' local and closure pairs by the current estimate
    (``mazeslam.posegraph.closures.candidate_pairs``) not tried before are matched; the accepted ones
    join the graph, which is solved (``mazeslam.posegraph.solve.solve_graph``: Geman-McClure on the
@@ -29,7 +33,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from mazeslam.core.geometry import relative
+from mazeslam.core.geometry import compose, relative
 from mazeslam.posegraph.closures import (
     Submap,
     build_submap,
@@ -143,7 +147,7 @@ def laser_pose_graph(run: LoadedRun, config: SlamConfig, params: PoseGraphParams
     blind = ~odometry.had_odometry
     blind[0] = False
     sequential = sequential_graph(odometry.increments, covariances, blind, priors, prior_covariances)
-    ambiguous = ambiguous_intervals(points, odometry.increments, prior_covariances, blind, scan_params, params)
+    ambiguous, modes = ambiguous_intervals(points, odometry.increments, prior_covariances, blind, scan_params, params)
     if ambiguous.any():  # the blind edges are the first S - 1; their constant-velocity priors stay
         priors_kept = np.ones(len(sequential) - len(chain) + 1, bool)
         sequential = sequential.select(np.concatenate([~ambiguous[1:], priors_kept]))
@@ -152,7 +156,7 @@ def laser_pose_graph(run: LoadedRun, config: SlamConfig, params: PoseGraphParams
         # No wheel odometry at all: the grid filter's best path is the first estimate.
         initial = grid_filter_path(run, config, odometry.scan_records)
     result = solve_laser_graph(
-        odometry.scan_records, chain, sequential, covariances, points, scan_params, params, began, initial
+        odometry.scan_records, chain, sequential, covariances, points, scan_params, params, began, initial, modes
     )
     return dataclasses.replace(
         result, covariances=with_first_pose_uncertainty(result.poses, result.covariances, covariances[0])
@@ -166,17 +170,19 @@ def ambiguous_intervals(
     blind: np.ndarray,
     scan_params: ScanMatchParams,
     params: PoseGraphParams,
-) -> np.ndarray:
+) -> tuple[np.ndarray, dict[int, np.ndarray]]:
     """(S,) bool: the blind interval's match (scan k to scan k-1, ``increments[k]``) has a second
     mode as good, by the local matches' ambiguity test (``match_to_submap`` against scan k-1 alone,
     within its motion prior's ``prior_covariances[k]`` bounded by ``max_window``; overlap not
-    required). Along a corridor a blind scan-to-scan match can sit metres off with as good an
+    required); and for each such k its modes, the increments (M, 3) the scan-to-scan match cannot
+    tell apart. Along a corridor a blind scan-to-scan match can sit metres off with as good an
     objective (orebro: the test finds the intervals 17, 28, 36, 213, 216, 221 and 227 that
     experiments/carmen_grid/results/orebro_checks.md finds metres or a right angle wrong, among 25
     of 236); such an edge is left out, its constant-velocity prior and the local matches place the
-    scan."""
+    scan, and the matches across it are searched around each of its modes (``guesses``)."""
     closure = dataclasses.replace(params.closures, min_overlap=0.0)
     found = np.zeros(len(increments), bool)
+    modes: dict[int, np.ndarray] = {}
     for k in np.flatnonzero(blind):
         if k == 0 or len(points[k - 1]) < max(scan_params.neighbours, 10) or len(points[k]) < scan_params.neighbours:
             continue
@@ -186,7 +192,26 @@ def ambiguous_intervals(
         window = np.diag([xy**2, xy**2, turn**2])
         match = match_to_submap(submap, points[k], increments[k], window, closure, scan_params, params.sequential)
         found[k] = match.refusal == "ambiguous"
-    return found
+        if found[k]:
+            modes[int(k)] = match.modes
+    return found, modes
+
+
+def guesses(poses: np.ndarray, anchor: int, query: int, modes: dict[int, np.ndarray]) -> np.ndarray:
+    """The pose of scan ``query`` in scan ``anchor``'s frame (G, 3): by the estimate ``poses``
+    (S, 3) first, then, for each ambiguous interval k between the two (``modes``: k -> the
+    increments (M, 3) its scan-to-scan match cannot tell apart), with the step from scan k-1 to k
+    replaced by each of its modes (the scans from k on moved with it)."""
+    found = [relative(poses[anchor], poses[query])]
+    first, last = min(anchor, query), max(anchor, query)
+    for k, increments in modes.items():
+        if not first < k <= last:
+            continue
+        for increment in increments:
+            moved = compose(poses[k - 1], increment)
+            placed = [poses[j] if j < k else compose(moved, relative(poses[k], poses[j])) for j in (anchor, query)]
+            found.append(relative(placed[0], placed[1]))
+    return np.array(found)
 
 
 def grid_filter_path(run: LoadedRun, config: SlamConfig, scan_records: np.ndarray) -> np.ndarray:
@@ -224,11 +249,14 @@ def solve_laser_graph(
     params: PoseGraphParams,
     began: float | None = None,
     initial: np.ndarray | None = None,
+    ambiguous_modes: dict[int, np.ndarray] | None = None,
 ) -> PoseGraphResult:
     """Steps 2-3 of the module docstring from the sequential edges: ``chain`` (S, 3) the chained
     poses, ``sequential`` their graph, ``covariances`` (S, 3, 3) the intervals' (index k: from scan
     k-1 to k; index 0 unused), which set the search windows, ``points`` the S scans' returns (K_s, 2)
-    in their robot frames."""
+    in their robot frames, ``ambiguous_modes`` the blind intervals left out as ambiguous with their
+    modes (``ambiguous_intervals``)."""
+    ambiguous_modes = ambiguous_modes or {}
     began = time.perf_counter() if began is None else began
     graph = sequential
     poses = (chain if initial is None else initial).copy()
@@ -245,7 +273,7 @@ def solve_laser_graph(
         passes += 1
         started = time.perf_counter()
         found = _matched_edges(
-            poses, keys, cumulative, points, scan_params, params, tried_pairs, tried, accepted, refused
+            poses, keys, cumulative, points, scan_params, params, ambiguous_modes, tried_pairs, tried, accepted, refused
         )
         graph = graph + found
         if solution is not None and not len(found):
@@ -281,6 +309,7 @@ def _matched_edges(
     points: list[np.ndarray],
     scan_params: ScanMatchParams,
     params: PoseGraphParams,
+    ambiguous_modes: dict[int, np.ndarray],
     tried_pairs: set,
     tried: dict,
     accepted: dict,
@@ -308,7 +337,7 @@ def _matched_edges(
         if submap is None or len(points[query]) < scan_params.neighbours:
             refused["empty"] += 1
             continue
-        guess = relative(poses[anchor], poses[query])
+        guess = guesses(poses, anchor, query, ambiguous_modes)
         window = chain_window(cumulative, path, anchor, query, closure)
         match = match_to_submap(submap, points[query], guess, window, closure, scan_params, params.sequential)
         if not match.accepted:

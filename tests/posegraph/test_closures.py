@@ -37,11 +37,11 @@ def _corridor(pillars) -> np.ndarray:
     return np.array(walls)
 
 
-def _match(walls, true_offset, guess_offset):
+def _match(walls, true_offset, guess_offset, window_sigma=1.0):
     """The submap of scans from x = -4..4 (every metre, facing both ways, anchored at the first)
-    and the query at ``true_offset`` (x) facing +x, matched from a guess ``guess_offset`` with a
-    1 m, 0.1 rad window; returns within 8 m, so that the submap covers all the query sees at every
-    pose the window reaches."""
+    and the query at ``true_offset`` (x) facing +x, matched from a guess ``guess_offset`` (x; or
+    several) with a ``window_sigma`` m, 0.1 rad window; returns within 8 m, so that the submap
+    covers all the query sees at every pose the window reaches."""
     rng = np.random.default_rng(0)
     laser = VirtualLaser(LASER, walls)
     mapped = [[x, 1.0, heading] for heading in (0.0, np.pi) for x in np.arange(-4.0, 4.5, 1.0)]
@@ -50,8 +50,8 @@ def _match(walls, true_offset, guess_offset):
     params = ClosureParams()
     submap = build_submap(0, np.arange(len(mapped)), poses, points, params, SCAN)
     assert submap is not None
-    guess = relative(poses[0], [guess_offset, 1.0, 0.0])
-    window = np.diag([1.0, 1.0, 0.1**2])
+    guess = np.array([relative(poses[0], [x, 1.0, 0.0]) for x in np.atleast_1d(guess_offset)])
+    window = np.diag([window_sigma**2, window_sigma**2, 0.1**2])
     match = match_to_submap(submap, points[-1], guess, window, params, SCAN, SequentialParams())
     return match, relative(poses[0], poses[-1])
 
@@ -60,6 +60,19 @@ def test_a_corridor_with_pillars_every_two_metres_is_refused_as_ambiguous():
     match, _ = _match(_corridor(np.arange(-100.0, 100.0, 2.0) + 0.3), true_offset=2.0, guess_offset=2.5)
     assert match.refusal == "ambiguous"
     assert match.second < match.best / ClosureParams().ambiguity_ratio
+
+
+def test_pillars_two_metres_apart_are_told_apart_only_when_each_is_searched():
+    # A guess one pillar spacing ahead of the truth and a narrow window (0.1 m): the one search
+    # sees one mode, and accepts it 2 m off. Searched around that guess and around the true step's
+    # (the modes of an ambiguous scan-to-scan step between the two scans), the two modes are as
+    # good: refused as ambiguous.
+    corridor = _corridor(np.arange(-100.0, 100.0, 2.0) + 0.3)
+    narrow, truth = _match(corridor, true_offset=2.0, guess_offset=4.0, window_sigma=0.1)
+    assert narrow.accepted and narrow.pose[0] == pytest.approx(truth[0] + 2.0, abs=0.05)
+    both, _ = _match(corridor, true_offset=2.0, guess_offset=[4.0, 2.0], window_sigma=0.1)
+    assert both.refusal == "ambiguous"
+    np.testing.assert_allclose(np.sort(both.modes[:2, 0]), [truth[0], truth[0] + 2.0], atol=0.05)
 
 
 def test_a_featureless_corridor_is_refused():

@@ -116,7 +116,7 @@ def test_the_blind_intervals_of_orebro_that_are_metres_off_are_found_ambiguous(t
     points = [scan_points(cut.values[record], run.geometry, scan_params) for record in odometry.scan_records]
     blind = ~odometry.had_odometry
     blind[0] = False
-    found = ambiguous_intervals(
+    found, _ = ambiguous_intervals(
         points, odometry.increments, odometry.priors(scan_params)[1], blind, scan_params, params
     )
     reference = run.truth[odometry.scan_records]
@@ -147,3 +147,17 @@ def test_without_wheel_odometry_the_graph_starts_from_the_grid_filters_path(shor
     odometry = absolute_trajectory_error(result.odometry_poses, truth, align=True)["rmse"]
     ate = absolute_trajectory_error(result.poses, truth, align=True)["rmse"]
     assert ate < 0.01 and ate <= odometry  # the blind chain: 0.005 m; no loop to close
+
+
+def test_a_match_across_an_ambiguous_step_is_guessed_from_each_of_its_modes():
+    # Scans 1 m apart along x; the step from scan 1 to 2 is ambiguous between 1 m (the estimate's)
+    # and 3 m, or a quarter turn in place: the scans from 2 on move with the step.
+    from mazeslam.posegraph.laser_graph import guesses
+
+    poses = np.array([[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [2.0, 0.0, 0.0], [3.0, 0.0, 0.0]])
+    modes = {2: np.array([[1.0, 0.0, 0.0], [3.0, 0.0, 0.0]])}
+    np.testing.assert_allclose(guesses(poses, 0, 3, modes), [[3, 0, 0], [3, 0, 0], [5, 0, 0]])
+    np.testing.assert_allclose(guesses(poses, 3, 0, modes), [[-3, 0, 0], [-3, 0, 0], [-5, 0, 0]])
+    np.testing.assert_allclose(guesses(poses, 2, 3, modes), [[1, 0, 0]])  # the step is not between them
+    turned = guesses(poses, 0, 3, {2: np.array([[1.0, 0.0, np.pi / 2]])})
+    np.testing.assert_allclose(turned[1], [2.0, 1.0, np.pi / 2], atol=1e-12)
