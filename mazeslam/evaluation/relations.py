@@ -121,7 +121,9 @@ class Relations:
 def read_relations(path: str | Path) -> Relations:
     """Read a relations file in the text format of Kümmerle et al.'s benchmark: one relation a line,
     ``t1 t2 x y z roll pitch yaw`` (s, s, m, m, m, rad, rad, rad); z, roll and pitch are ignored (2-D).
-    Blank lines and lines starting with ``#`` are skipped. Errors name the file and the line."""
+    Blank lines and lines starting with ``#`` are skipped. Errors name the file and the line (a
+    line whose two times are equal but whose motion is not zero is one: made from poses without a
+    clock)."""
     text = read_text(Path(path), "relations file")
     rows, lines = [], []
     for number, line in enumerate(text.splitlines(), start=1):
@@ -136,6 +138,11 @@ def read_relations(path: str | Path) -> Relations:
             raise InputError(f"{path}:{number}: not a number in {line.strip()[:60]!r}") from None
         if not all(math.isfinite(value) for value in values):
             raise InputError(f"{path}:{number}: every value must be finite")
+        if values[0] == values[1] and any(values[i] != 0 for i in (2, 3, 7)):
+            raise InputError(
+                f"{path}:{number}: a motion between two poses at one time ({values[0]:g} s): relations are "
+                "matched by time, so poses without a clock (a log whose scans share one time) cannot be scored"
+            )
         rows.append(values)
         lines.append(number)
     if not rows:

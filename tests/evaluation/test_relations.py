@@ -129,6 +129,7 @@ def test_a_run_that_ended_early_is_named_as_such(tmp_path):
         ("# header\n1 2 0.5 0 0 0 0 x\n", r"bad.relations:2: not a number"),
         ("1 2 nan 0 0 0 0 0\n", r"bad.relations:1: every value must be finite"),
         ("# nothing\n\n", r"bad.relations: no relations"),
+        ("1 2 0.5 0 0 0 0 0\n0 0 0.5 0 0 0 0 0\n", r"bad.relations:2: a motion between two poses at one time"),
     ],
 )
 def test_a_broken_relations_file_names_the_file_and_line(tmp_path, text, message):
