@@ -126,19 +126,25 @@ def main() -> None:
     run_jobs(run_one, jobs, args.jobs, RESULTS / "table.csv", ["log", "seed"])
 
 
+def with_rows_kept(table: pd.DataFrame, path: Path, keys: list[str], dtype: dict | None = None) -> pd.DataFrame:
+    """``table``'s rows and those of the CSV ``path`` (read with ``dtype``) whose ``keys`` it does not
+    hold (a run of some logs or seeds keeps the others'), sorted by ``keys`` (stable: rows sharing
+    keys keep their order)."""
+    if path.exists():
+        old = pd.read_csv(path, dtype=dtype)
+        keep = ~old.set_index(keys).index.isin(table.set_index(keys).index)
+        table = pd.concat([old[keep], table])
+    return table.sort_values(keys, kind="stable").reset_index(drop=True)
+
+
 def run_jobs(worker: Callable[..., dict], jobs: list[tuple], processes: int, path: Path, keys: list[str]) -> None:
     """Run ``worker(*job)`` for each of ``jobs``, each in a process of its own (``processes`` at a
     time), printing each row it returns as it comes, then write the rows to the CSV ``path`` with the
     rows already there whose ``keys`` they do not have (a run of some logs or seeds keeps the
     others'), sorted by ``keys``, and print the table written."""
     rows = map_parallel(worker, jobs, processes, fresh_process=True, on_result=lambda _, row: print(row, flush=True))
-    table = pd.DataFrame(rows)
     path.parent.mkdir(parents=True, exist_ok=True)
-    if path.exists():
-        old = pd.read_csv(path)
-        keep = ~old.set_index(keys).index.isin(table.set_index(keys).index)
-        table = pd.concat([old[keep], table])
-    table = table.sort_values(keys)
+    table = with_rows_kept(pd.DataFrame(rows), path, keys)
     table.to_csv(path, index=False, float_format="%.4g")
     print(table.to_markdown(index=False, floatfmt=".3g"))
 

@@ -6,7 +6,7 @@ beside that start path's own (the grid filter's, experiments/carmen_grid/results
 seed and settings).
 
 Run: ``python -m experiments.carmen_posegraph.orebro_starts [--jobs 2]`` (after experiments/carmen_grid's
-run.py); writes results/orebro_starts.csv and results/orebro_starts.md. About 1 CPU minute a seed.
+run.py); writes results/orebro_starts.csv and results/orebro_starts.md. About 2.5 CPU minutes a seed.
 """
 
 from __future__ import annotations

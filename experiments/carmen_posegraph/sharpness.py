@@ -30,7 +30,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from experiments.carmen_grid.run import LOGS, imported_run
+from experiments.carmen_grid.run import LOGS, imported_run, with_rows_kept
 from experiments.carmen_posegraph.error_anatomy import stretches
 from experiments.carmen_posegraph.run import RESULTS, write_results
 from mazeslam.data.loaded_run import LoadedRun
@@ -119,22 +119,11 @@ def stretch_rows(name: str) -> list[dict]:
     return rows
 
 
-def with_other_logs(table: pd.DataFrame, name: str) -> pd.DataFrame:
-    """``table``'s rows and those of results/<name>.csv for the logs ``table`` does not hold (a run
-    of some logs keeps the others'), in ``LOGS`` order."""
-    path = RESULTS / f"{name}.csv"
-    if path.exists():
-        old = pd.read_csv(path, dtype={"scans": str})
-        table = pd.concat([old[~old.log.isin(table.log)], table])
-    order = {log: index for index, log in enumerate(LOGS)}
-    return table.sort_values("log", key=lambda logs: logs.map(order), kind="stable").reset_index(drop=True)
-
-
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--logs", nargs="+", default=LOGS, choices=LOGS)
     logs = parser.parse_args().logs
-    table = with_other_logs(pd.DataFrame([log_row(name) for name in logs]), "sharpness")
+    table = with_rows_kept(pd.DataFrame([log_row(name) for name in logs]), RESULTS / "sharpness.csv", ["log"])
     caption = (
         "Occupied 0.05 m cells of each CARMEN log's returns (0.1-8 m) placed by the pose graph and by the grid "
         "filter's best path (5 seeds: best, median, worst), as a ratio to the same count along the reference "
@@ -142,7 +131,8 @@ def main() -> None:
         "ratio to the reference's (experiments/carmen_posegraph/sharpness.py)."
     )
     write_results(table, "sharpness", caption)
-    local = with_other_logs(pd.DataFrame([row for name in logs for row in stretch_rows(name)]), "stretch_sharpness")
+    local = pd.DataFrame([row for name in logs for row in stretch_rows(name)])
+    local = with_rows_kept(local, RESULTS / "stretch_sharpness.csv", ["log"], dtype={"scans": str})
     caption = (
         f"Where the pose graph is more than 0.3 m from the reference (aligned): the occupied 0.05 m cells of the "
         f"returns (0.1-8 m) of every scan within {NEAR:g} m of the stretch by the reference, placed by the graph and "

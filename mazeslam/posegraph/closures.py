@@ -20,9 +20,9 @@ it along the path (and beyond the query's neighbouring keyframe on the anchor's 
 an anchor behind the query, after it for one ahead), placed by the estimate in the anchor's robot
 frame and thinned to one point per ``voxel``. The search window around the estimate's relative pose
 (and around each alternative the caller passes: ``match_to_submap`` takes several guesses and
-compares their modes together) has the standard deviation the sequential chain between the two scans states (its summed
-covariances, the heading's spread swinging the path, ``chain_window``), at least ``min_window`` and
-at most ``max_window``.
+compares their modes together) has the standard deviation the sequential chain between the two
+scans states (its summed covariances, the heading's spread swinging the path, ``chain_window``), at
+least ``min_window`` and at most ``max_window``.
 
 The ambiguity test (as Olson's and Karto's loop closers): the search's best distinct basins are each
 refined; refined poses within ``mode_distance`` and ``mode_turn`` of a better one are the same mode.
